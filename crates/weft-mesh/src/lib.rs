@@ -1,0 +1,17 @@
+//! Triangle meshes for weft: reading and writing, validation, topology, graphs, hop
+//! distances, eccentricity, geodesics and the Nyström spectrum of a garment.
+//!
+//! Everything here is plain `f64` geometry with no learning dependency, so the crate
+//! builds and tests in seconds and every other crate can stand on it.
+
+pub mod error;
+pub mod graph;
+mod math;
+pub mod mesh;
+pub mod primitives;
+pub mod topology;
+
+pub use error::MeshError;
+pub use graph::{Bfs, Components, Graph, UNREACHED};
+pub use mesh::{Aabb, TriMesh};
+pub use topology::{Hinge, Topology};
