@@ -4,14 +4,19 @@
 //! Everything here is plain `f64` geometry with no learning dependency, so the crate
 //! builds and tests in seconds and every other crate can stand on it.
 
+pub mod eccentricity;
 pub mod error;
+pub mod geodesic;
 pub mod graph;
 mod math;
 pub mod mesh;
+pub mod nystrom;
 pub mod primitives;
 pub mod topology;
 
 pub use error::MeshError;
+pub use geodesic::{GeodesicError, Geodesics};
 pub use graph::{Bfs, Components, Graph, UNREACHED};
 pub use mesh::{Aabb, TriMesh};
+pub use nystrom::{farthest_point_sampling, NystromError, NystromSpectrum};
 pub use topology::{Hinge, Topology};
