@@ -1,0 +1,15 @@
+//! Typed errors of hierarchy construction.
+
+/// What can go wrong building a hierarchy.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum HierarchyError {
+    /// Unpooling needs a kept vertex in every component of the fine graph.
+    #[error("vertex {vertex}: its connected component keeps no vertex, so unpooling has nothing to fill it from")]
+    NoKeptVertex {
+        /// The fine vertex that cannot be filled.
+        vertex: usize,
+    },
+    /// A hierarchy has at least its finest level.
+    #[error("a hierarchy needs at least 1 level, got 0")]
+    NoLevels,
+}
