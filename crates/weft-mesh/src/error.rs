@@ -22,8 +22,8 @@ pub enum MeshError {
         path: PathBuf,
     },
     /// The file does not parse; `line` is 1-based, 0 when the position is not a line
-    /// (a binary PLY body).
-    #[error("{path}:{line}: {message}")]
+    /// (a binary PLY body, whose message names the element and byte offset instead).
+    #[error("{}{}: {message}", .path.display(), LineSuffix(*.line))]
     Parse {
         /// The file.
         path: PathBuf,
@@ -31,6 +31,16 @@ pub enum MeshError {
         line: usize,
         /// What was found and what was expected.
         message: String,
+    },
+    /// The file parsed but holds no triangle mesh: no vertices or no faces.
+    #[error("{path}: the mesh is empty ({vertices} vertices, {faces} faces); expected at least one triangle")]
+    Empty {
+        /// The file.
+        path: PathBuf,
+        /// Number of vertices read.
+        vertices: usize,
+        /// Number of faces read.
+        faces: usize,
     },
     /// The file parsed but breaks a mesh invariant weft relies on.
     #[error("{path}: {element} {index}: {message}")]
@@ -44,4 +54,33 @@ pub enum MeshError {
         /// What is wrong and what was expected.
         message: String,
     },
+}
+
+/// Formats `:LINE` after the path, or nothing for line 0 (no line applies).
+struct LineSuffix(usize);
+
+impl std::fmt::Display for LineSuffix {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.0 > 0 {
+            write!(f, ":{}", self.0)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parse_errors_show_the_line_only_when_there_is_one() {
+        let e = |line| MeshError::Parse {
+            path: "a.ply".into(),
+            line,
+            message: "bad".into(),
+        };
+        assert_eq!(e(3).to_string(), "a.ply:3: bad");
+        assert_eq!(e(0).to_string(), "a.ply: bad");
+    }
 }
