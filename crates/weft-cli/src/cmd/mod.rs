@@ -1,0 +1,36 @@
+//! Subcommands, one module each.
+
+mod mesh;
+
+use clap::Subcommand;
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Inspect meshes and build their multilevel graph hierarchies.
+    #[command(subcommand)]
+    Mesh(mesh::MeshCommand),
+}
+
+pub fn run(command: Command) -> anyhow::Result<()> {
+    match command {
+        Command::Mesh(c) => mesh::run(c),
+    }
+}
+
+/// Writes a command's output to stdout. A closed pipe (`weft … | head`) is the reader's
+/// choice, not an error, so it ends the command quietly instead of panicking.
+pub fn emit(text: &str) -> anyhow::Result<()> {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    let written = stdout.write_all(text.as_bytes()).and_then(|()| {
+        if text.ends_with('\n') {
+            Ok(())
+        } else {
+            stdout.write_all(b"\n")
+        }
+    });
+    match written.and_then(|()| stdout.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
+    }
+}
