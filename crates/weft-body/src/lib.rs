@@ -1,0 +1,10 @@
+//! Bodies for weft: the SMPL-format body model (v_template, shapedirs, posedirs,
+//! J_regressor, weights, kintree_table, f), rotations (Rodrigues, dual quaternions),
+//! forward kinematics over the kinematic tree, linear blend and dual quaternion
+//! skinning, and motions.
+//!
+//! A geometry crate: no learning dependency, so it builds and tests in seconds.
+
+pub mod kinematics;
+pub mod rotation;
+pub mod skinning;
