@@ -7,7 +7,7 @@ use crate::math::{add, cross, norm, normalize_or_zero, sub};
 /// A triangle mesh in metres, right-handed, Y up.
 ///
 /// Faces index `positions` and are counter-clockwise seen from the side their normal
-/// points to. Construction does not validate; run [`crate::validate`] on anything a user
+/// points to. Construction does not validate; run [`crate::validate::validate`] on anything a user
 /// supplied before trusting the invariants (indices in range, finite positions).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {
@@ -50,10 +50,8 @@ impl TriMesh {
             max: first,
         };
         for p in &self.positions {
-            for k in 0..3 {
-                b.min[k] = b.min[k].min(p[k]);
-                b.max[k] = b.max[k].max(p[k]);
-            }
+            b.min = std::array::from_fn(|k| b.min[k].min(p[k]));
+            b.max = std::array::from_fn(|k| b.max[k].max(p[k]));
         }
         Some(b)
     }
