@@ -1,0 +1,958 @@
+//! NumPy `.npz` archives: a zip of `.npy` members, read by name with dtype and shape
+//! checks, and written atomically.
+//!
+//! Body models (SMPL's and weft's own), motions (AMASS) and datasets travel as `.npz`.
+//! What we need from the format is small, and the point is the errors: every failure
+//! names the file, the key (the array's name, without `.npy`) and what was expected
+//! against what was found, so "wrong shape of `shapedirs`" is one line a user can act on.
+//!
+//! Reading:
+//! - members stored or deflated (`numpy.savez` and `numpy.savez_compressed`);
+//! - `.npy` format versions 1.0, 2.0 and 3.0, little-endian or byte-order-free dtypes
+//!   `<f4 <f8 <i1 <i2 <i4 <i8 <u1 <u2 <u4 <u8 |b1` (and `|i1 |u1`);
+//! - **Fortran-order arrays** too, transposed to C order on load: files converted from
+//!   SMPL's pickles often hold Fortran-ordered arrays, and refusing them would break the
+//!   promise that a user's SMPL file loads unchanged;
+//! - members are parsed only when asked for, so a file may carry other members weft does
+//!   not read (strings, objects: SMPL files have `bs_style`, `bs_type`).
+//!
+//! Typed access converts losslessly within a kind: [`Npz::floats`] accepts `f4`/`f8` as
+//! `f64`, [`Npz::ints`] any integer or bool dtype as `i64`. Floats are never silently
+//! turned into indices, nor indices into floats.
+//!
+//! Writing ([`NpzWriter`]) builds the archive in memory and hands it to
+//! [`write_atomic`](super::write_atomic), so a crash never leaves a partial file; entries
+//! get a fixed timestamp so the same arrays give the same bytes.
+//!
+//! The `.npy` member parsing is private here. `crate::export::npy` (written at the same
+//! time) has a strict standalone `.npy` reader; the two can be merged once both have
+//! settled (that one refuses Fortran order, which `.npz` files from SMPL need).
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::io::{self, Cursor, Read, Write};
+use std::path::{Path, PathBuf};
+
+use super::write_atomic;
+
+/// The largest member weft will inflate (bytes): far above any body model or motion, far
+/// below what would exhaust memory from a corrupt size field.
+pub const MAX_MEMBER_BYTES: u64 = 8 << 30;
+
+/// What went wrong reading or writing a `.npz` file.
+#[derive(Debug, thiserror::Error)]
+pub enum NpzError {
+    /// The file could not be read or written.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: io::Error,
+    },
+    /// The file is not a readable zip archive, or a member is damaged.
+    #[error("{}: {message}", .path.display())]
+    Archive {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// A key the caller needs is not in the archive.
+    #[error("{}: no array `{key}` (the file has: {}); expected an .npz with `{key}`", .path.display(), .available.join(", "))]
+    Missing {
+        /// The file.
+        path: PathBuf,
+        /// The array name asked for.
+        key: String,
+        /// The array names present.
+        available: Vec<String>,
+    },
+    /// The member is not a `.npy` array weft reads.
+    #[error("{}: `{key}`: {message}", .path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// The array name.
+        key: String,
+        /// What was found and what was expected.
+        message: String,
+    },
+    /// The array has an element type of the wrong kind.
+    #[error("{}: `{key}` has dtype '{found}'; expected {expected}", .path.display())]
+    Dtype {
+        /// The file.
+        path: PathBuf,
+        /// The array name.
+        key: String,
+        /// What would have been accepted, in words.
+        expected: String,
+        /// The NumPy `descr` found.
+        found: String,
+    },
+    /// The array has the wrong shape.
+    #[error("{}: `{key}` has shape {}; expected {}", .path.display(), Shape(.found), ShapePattern(.expected))]
+    Shape {
+        /// The file.
+        path: PathBuf,
+        /// The array name.
+        key: String,
+        /// The expected shape, `None` where any extent is accepted.
+        expected: Vec<Option<usize>>,
+        /// The shape found.
+        found: Vec<usize>,
+    },
+}
+
+/// An array read from an `.npz`: its shape (C order) and its elements.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NpzArray<T> {
+    /// Extent of each axis; empty for a scalar.
+    pub shape: Vec<usize>,
+    /// The elements in C order, `shape.iter().product()` of them.
+    pub data: Vec<T>,
+}
+
+/// A `.npz` archive opened for reading. Members are inflated and parsed on request.
+pub struct Npz {
+    path: PathBuf,
+    archive: zip::ZipArchive<Cursor<Vec<u8>>>,
+    /// Array name (member name without `.npy`) → member name.
+    members: BTreeMap<String, String>,
+}
+
+impl fmt::Debug for Npz {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Npz")
+            .field("path", &self.path)
+            .field("keys", &self.members.keys().collect::<Vec<_>>())
+            .finish()
+    }
+}
+
+impl Npz {
+    /// Opens the `.npz` file at `path`.
+    pub fn open(path: &Path) -> Result<Self, NpzError> {
+        let bytes = std::fs::read(path).map_err(|source| NpzError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_bytes(bytes, path)
+    }
+
+    /// Reads an `.npz` held in memory; `path` only names it in errors.
+    pub fn from_bytes(bytes: Vec<u8>, path: &Path) -> Result<Self, NpzError> {
+        let archive = zip::ZipArchive::new(Cursor::new(bytes)).map_err(|e| NpzError::Archive {
+            path: path.to_path_buf(),
+            message: format!(
+                "not a readable .npz (zip) archive: {e}; expected a file written by numpy.savez"
+            ),
+        })?;
+        let members = archive
+            .file_names()
+            .filter(|n| !n.ends_with('/'))
+            .map(|n| {
+                (
+                    n.strip_suffix(".npy").unwrap_or(n).to_string(),
+                    n.to_string(),
+                )
+            })
+            .collect();
+        Ok(Npz {
+            path: path.to_path_buf(),
+            archive,
+            members,
+        })
+    }
+
+    /// The file this archive was read from.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The array names, sorted.
+    pub fn keys(&self) -> Vec<String> {
+        self.members.keys().cloned().collect()
+    }
+
+    /// Whether the archive has an array called `key`.
+    pub fn contains(&self, key: &str) -> bool {
+        self.members.contains_key(key)
+    }
+
+    /// The raw member bytes of `key`.
+    fn member(&mut self, key: &str) -> Result<Vec<u8>, NpzError> {
+        let Some(name) = self.members.get(key).cloned() else {
+            return Err(NpzError::Missing {
+                path: self.path.clone(),
+                key: key.into(),
+                available: self.keys(),
+            });
+        };
+        let archive_err = |path: &Path, e: &dyn fmt::Display| NpzError::Archive {
+            path: path.to_path_buf(),
+            message: format!("member `{name}`: {e}"),
+        };
+        let mut file = self
+            .archive
+            .by_name(&name)
+            .map_err(|e| archive_err(&self.path, &e))?;
+        let size = file.size();
+        if size > MAX_MEMBER_BYTES {
+            return Err(NpzError::Invalid {
+                path: self.path.clone(),
+                key: key.into(),
+                message: format!(
+                    "the member claims {size} bytes, more than the {MAX_MEMBER_BYTES} weft reads at once"
+                ),
+            });
+        }
+        let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
+        // Read one byte past the declared size so a lying header is caught, not trusted.
+        file.by_ref()
+            .take(size + 1)
+            .read_to_end(&mut bytes)
+            .map_err(|e| archive_err(&self.path, &e))?;
+        if bytes.len() as u64 != size {
+            return Err(archive_err(
+                &self.path,
+                &format!(
+                    "inflates to {} bytes but its header says {size}; the file is damaged",
+                    bytes.len()
+                ),
+            ));
+        }
+        Ok(bytes)
+    }
+
+    /// Parses member `key` into its dtype, shape and C-order bytes.
+    fn raw(&mut self, key: &str) -> Result<RawArray, NpzError> {
+        let bytes = self.member(key)?;
+        parse_npy(&bytes).map_err(|message| NpzError::Invalid {
+            path: self.path.clone(),
+            key: key.into(),
+            message,
+        })
+    }
+
+    /// The dtype (`descr`) and shape of `key`, without converting its data.
+    pub fn describe(&mut self, key: &str) -> Result<(String, Vec<usize>), NpzError> {
+        let raw = self.raw(key)?;
+        Ok((raw.dtype.descr().to_string(), raw.shape))
+    }
+
+    /// A floating-point array (`f4` or `f8`) as `f64`, checked against `expected`
+    /// (`None` accepts any extent on that axis).
+    pub fn floats(
+        &mut self,
+        key: &str,
+        expected: &[Option<usize>],
+    ) -> Result<NpzArray<f64>, NpzError> {
+        let raw = self.raw(key)?;
+        let data = match raw.dtype {
+            Dtype::F4 => raw.decode(|b| f64::from(f32::from_le_bytes(arr(b)))),
+            Dtype::F8 => raw.decode(|b| f64::from_le_bytes(arr(b))),
+            d => return Err(self.dtype_error(key, "a float array ('<f4' or '<f8')", d)),
+        };
+        self.check_shape(key, expected, &raw.shape)?;
+        Ok(NpzArray {
+            shape: raw.shape,
+            data,
+        })
+    }
+
+    /// An integer or bool array (any width, signed or not) as `i64`, checked against
+    /// `expected`. `u8` values above `i64::MAX` are refused as out of range.
+    pub fn ints(
+        &mut self,
+        key: &str,
+        expected: &[Option<usize>],
+    ) -> Result<NpzArray<i64>, NpzError> {
+        let raw = self.raw(key)?;
+        let data = match raw.dtype {
+            Dtype::B1 | Dtype::U1 => raw.decode(|b| i64::from(b[0])),
+            Dtype::I1 => raw.decode(|b| i64::from(b[0] as i8)),
+            Dtype::I2 => raw.decode(|b| i64::from(i16::from_le_bytes(arr(b)))),
+            Dtype::U2 => raw.decode(|b| i64::from(u16::from_le_bytes(arr(b)))),
+            Dtype::I4 => raw.decode(|b| i64::from(i32::from_le_bytes(arr(b)))),
+            Dtype::U4 => raw.decode(|b| i64::from(u32::from_le_bytes(arr(b)))),
+            Dtype::I8 => raw.decode(|b| i64::from_le_bytes(arr(b))),
+            Dtype::U8 => {
+                let wide = raw.decode(|b| u64::from_le_bytes(arr(b)));
+                let mut out = Vec::with_capacity(wide.len());
+                for (i, &x) in wide.iter().enumerate() {
+                    out.push(i64::try_from(x).map_err(|_| NpzError::Invalid {
+                        path: self.path.clone(),
+                        key: key.into(),
+                        message: format!("element {i} is {x}, too large for a 64-bit signed index"),
+                    })?);
+                }
+                out
+            }
+            d @ (Dtype::F4 | Dtype::F8) => {
+                return Err(self.dtype_error(key, "an integer array ('<i4', '<i8', '<u4', …)", d))
+            }
+        };
+        self.check_shape(key, expected, &raw.shape)?;
+        Ok(NpzArray {
+            shape: raw.shape,
+            data,
+        })
+    }
+
+    fn dtype_error(&self, key: &str, expected: &str, found: Dtype) -> NpzError {
+        NpzError::Dtype {
+            path: self.path.clone(),
+            key: key.into(),
+            expected: expected.into(),
+            found: found.descr().into(),
+        }
+    }
+
+    /// Fails unless `found` matches `expected` axis by axis.
+    pub fn check_shape(
+        &self,
+        key: &str,
+        expected: &[Option<usize>],
+        found: &[usize],
+    ) -> Result<(), NpzError> {
+        let ok = expected.len() == found.len()
+            && expected
+                .iter()
+                .zip(found)
+                .all(|(e, &f)| e.map_or(true, |e| e == f));
+        if ok {
+            Ok(())
+        } else {
+            Err(NpzError::Shape {
+                path: self.path.clone(),
+                key: key.into(),
+                expected: expected.to_vec(),
+                found: found.to_vec(),
+            })
+        }
+    }
+}
+
+fn arr<const N: usize>(b: &[u8]) -> [u8; N] {
+    let mut out = [0u8; N];
+    out.copy_from_slice(b);
+    out
+}
+
+/// An element type [`NpzWriter`] stores.
+pub trait NpzElement: Copy {
+    /// The NumPy `descr`.
+    const DESCR: &'static str;
+    /// Appends the little-endian bytes.
+    fn put(self, out: &mut Vec<u8>);
+}
+
+macro_rules! npz_element {
+    ($t:ty, $d:literal) => {
+        impl NpzElement for $t {
+            const DESCR: &'static str = $d;
+            fn put(self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_le_bytes());
+            }
+        }
+    };
+}
+npz_element!(f32, "<f4");
+npz_element!(f64, "<f8");
+npz_element!(i32, "<i4");
+npz_element!(i64, "<i8");
+npz_element!(u32, "<u4");
+npz_element!(u8, "|u1");
+
+impl NpzElement for bool {
+    const DESCR: &'static str = "|b1";
+    fn put(self, out: &mut Vec<u8>) {
+        out.push(u8::from(self));
+    }
+}
+
+/// Builds an `.npz` in memory, then writes it atomically.
+///
+/// ```
+/// use weft_mesh::io::npz::{Npz, NpzWriter};
+/// # let path = std::env::temp_dir().join(format!("weft-doc-npz-{}.npz", std::process::id()));
+/// let mut w = NpzWriter::new(true);
+/// w.add("betas", &[2], &[0.5f32, -1.0])?;
+/// w.write(&path)?;
+/// let mut npz = Npz::open(&path)?;
+/// assert_eq!(npz.floats("betas", &[Some(2)])?.data, vec![0.5, -1.0]);
+/// # std::fs::remove_file(&path).ok();
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub struct NpzWriter {
+    compressed: bool,
+    members: Vec<(String, Vec<u8>)>,
+}
+
+impl NpzWriter {
+    /// A new, empty archive; `compressed` deflates the members (`numpy.savez_compressed`),
+    /// otherwise they are stored (`numpy.savez`).
+    pub fn new(compressed: bool) -> Self {
+        NpzWriter {
+            compressed,
+            members: Vec::new(),
+        }
+    }
+
+    /// Adds array `key` of `shape` (C order). Fails with
+    /// [`io::ErrorKind::InvalidInput`] when `data` does not hold the elements `shape`
+    /// describes, or when `key` was already added.
+    pub fn add<T: NpzElement>(&mut self, key: &str, shape: &[usize], data: &[T]) -> io::Result<()> {
+        let expected = shape.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+        if expected != Some(data.len()) {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "`{key}`: shape {} does not hold {} elements",
+                    Shape(shape),
+                    data.len()
+                ),
+            ));
+        }
+        if self.members.iter().any(|(k, _)| k == key) {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("`{key}` added twice"),
+            ));
+        }
+        let mut bytes = npy_header(T::DESCR, shape);
+        bytes.reserve(std::mem::size_of_val(data));
+        for &x in data {
+            x.put(&mut bytes);
+        }
+        self.members.push((key.to_string(), bytes));
+        Ok(())
+    }
+
+    /// The archive's bytes.
+    pub fn to_bytes(&self) -> io::Result<Vec<u8>> {
+        let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
+        let method = if self.compressed {
+            zip::CompressionMethod::Deflated
+        } else {
+            zip::CompressionMethod::Stored
+        };
+        let options = zip::write::SimpleFileOptions::default()
+            .compression_method(method)
+            .last_modified_time(zip::DateTime::default())
+            .large_file(
+                self.members
+                    .iter()
+                    .any(|(_, b)| b.len() as u64 >= u32::MAX as u64),
+            );
+        for (key, bytes) in &self.members {
+            zip.start_file(format!("{key}.npy"), options)
+                .map_err(io::Error::other)?;
+            zip.write_all(bytes)?;
+        }
+        Ok(zip.finish().map_err(io::Error::other)?.into_inner())
+    }
+
+    /// Writes the archive to `path` atomically.
+    pub fn write(&self, path: &Path) -> Result<(), NpzError> {
+        let io_err = |source| NpzError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let bytes = self.to_bytes().map_err(io_err)?;
+        write_atomic(path, |w| w.write_all(&bytes)).map_err(io_err)
+    }
+}
+
+/// The `.npy` preamble and header for `descr` and `shape`, padded so the data starts at
+/// a multiple of 64 bytes, as NumPy writes it.
+fn npy_header(descr: &str, shape: &[usize]) -> Vec<u8> {
+    let shape_text = match shape {
+        [n] => format!("({n},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    let mut dict =
+        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape_text}, }}");
+    let total = (10 + dict.len() + 1).div_ceil(64) * 64;
+    while 10 + dict.len() + 1 < total {
+        dict.push(' ');
+    }
+    dict.push('\n');
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"\x93NUMPY\x01\x00");
+    // A header of a few dozen shape entries stays far below u16::MAX.
+    out.extend_from_slice(&u16::try_from(dict.len()).unwrap_or(u16::MAX).to_le_bytes());
+    out.extend_from_slice(dict.as_bytes());
+    out
+}
+
+/// Element types of `.npy` members weft reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Dtype {
+    F4,
+    F8,
+    I1,
+    I2,
+    I4,
+    I8,
+    U1,
+    U2,
+    U4,
+    U8,
+    B1,
+}
+
+impl Dtype {
+    fn parse(descr: &str) -> Result<Self, String> {
+        let (order, code) = descr.split_at(descr.len().min(1));
+        if order == ">" && !matches!(code, "i1" | "u1" | "b1") {
+            return Err(format!(
+                "dtype '{descr}' is big-endian; expected little-endian data (in NumPy: a.astype(a.dtype.newbyteorder('<')))"
+            ));
+        }
+        if !matches!(order, "<" | "|" | "=" | ">") {
+            return Err(format!("dtype '{descr}' is not a numeric dtype weft reads"));
+        }
+        Ok(match code {
+            "f4" => Dtype::F4,
+            "f8" => Dtype::F8,
+            "i1" => Dtype::I1,
+            "i2" => Dtype::I2,
+            "i4" => Dtype::I4,
+            "i8" => Dtype::I8,
+            "u1" => Dtype::U1,
+            "u2" => Dtype::U2,
+            "u4" => Dtype::U4,
+            "u8" => Dtype::U8,
+            "b1" => Dtype::B1,
+            _ => {
+                return Err(format!(
+                    "dtype '{descr}' is not supported; expected a float ('<f4', '<f8'), integer ('<i4', '<i8', '<u4', …) or bool ('|b1') array"
+                ))
+            }
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Dtype::I1 | Dtype::U1 | Dtype::B1 => 1,
+            Dtype::I2 | Dtype::U2 => 2,
+            Dtype::F4 | Dtype::I4 | Dtype::U4 => 4,
+            Dtype::F8 | Dtype::I8 | Dtype::U8 => 8,
+        }
+    }
+
+    fn descr(self) -> &'static str {
+        match self {
+            Dtype::F4 => "<f4",
+            Dtype::F8 => "<f8",
+            Dtype::I1 => "|i1",
+            Dtype::I2 => "<i2",
+            Dtype::I4 => "<i4",
+            Dtype::I8 => "<i8",
+            Dtype::U1 => "|u1",
+            Dtype::U2 => "<u2",
+            Dtype::U4 => "<u4",
+            Dtype::U8 => "<u8",
+            Dtype::B1 => "|b1",
+        }
+    }
+}
+
+/// A parsed member: dtype, C-order shape and C-order element bytes.
+struct RawArray {
+    dtype: Dtype,
+    shape: Vec<usize>,
+    bytes: Vec<u8>,
+}
+
+impl RawArray {
+    fn decode<T>(&self, f: impl Fn(&[u8]) -> T) -> Vec<T> {
+        self.bytes.chunks_exact(self.dtype.size()).map(f).collect()
+    }
+}
+
+/// Parses a `.npy` member; Fortran-order data is transposed to C order.
+fn parse_npy(bytes: &[u8]) -> Result<RawArray, String> {
+    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+        return Err(
+            "not a .npy array (no \\x93NUMPY magic); expected a numeric array saved by numpy.savez"
+                .into(),
+        );
+    }
+    let (major, minor) = (bytes[6], bytes[7]);
+    let (header_len, start): (usize, usize) = match major {
+        1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
+        2 | 3 if bytes.len() >= 12 => (
+            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+            12,
+        ),
+        _ => {
+            return Err(format!(
+                ".npy format version {major}.{minor}; expected 1.0, 2.0 or 3.0"
+            ))
+        }
+    };
+    let data_start = start
+        .checked_add(header_len)
+        .filter(|&e| e <= bytes.len())
+        .ok_or("the .npy header is truncated")?;
+    let header = std::str::from_utf8(&bytes[start..data_start])
+        .map_err(|_| "the .npy header is not text".to_string())?;
+    let (descr, fortran, shape) = parse_header(header)?;
+    let dtype = Dtype::parse(&descr)?;
+    let count = shape
+        .iter()
+        .try_fold(1usize, |a, &d| a.checked_mul(d))
+        .ok_or_else(|| format!("shape {} is too large", Shape(&shape)))?;
+    let needed = count
+        .checked_mul(dtype.size())
+        .ok_or_else(|| format!("shape {} is too large", Shape(&shape)))?;
+    let data = &bytes[data_start..];
+    if data.len() != needed {
+        return Err(format!(
+            "the data has {} bytes but shape {} of '{descr}' needs {needed}; the array is truncated or not what its header says",
+            data.len(),
+            Shape(&shape)
+        ));
+    }
+    let bytes = if fortran && shape.len() > 1 {
+        fortran_to_c(data, &shape, dtype.size())
+    } else {
+        data.to_vec()
+    };
+    Ok(RawArray {
+        dtype,
+        shape,
+        bytes,
+    })
+}
+
+/// Reorders Fortran-order (first index fastest) element bytes into C order.
+fn fortran_to_c(data: &[u8], shape: &[usize], size: usize) -> Vec<u8> {
+    let count: usize = shape.iter().product();
+    // Fortran strides, in elements.
+    let mut fstride = vec![1usize; shape.len()];
+    for k in 1..shape.len() {
+        fstride[k] = fstride[k - 1] * shape[k - 1];
+    }
+    let mut out = Vec::with_capacity(data.len());
+    let mut index = vec![0usize; shape.len()];
+    for _ in 0..count {
+        let src: usize = index.iter().zip(&fstride).map(|(i, s)| i * s).sum();
+        out.extend_from_slice(&data[src * size..(src + 1) * size]);
+        // Advance the C-order multi-index (last index fastest).
+        for k in (0..shape.len()).rev() {
+            index[k] += 1;
+            if index[k] < shape[k] {
+                break;
+            }
+            index[k] = 0;
+        }
+    }
+    out
+}
+
+/// Parses `{'descr': STR, 'fortran_order': BOOL, 'shape': TUPLE}` (any key order,
+/// trailing comma allowed) into (descr, fortran_order, shape).
+fn parse_header(text: &str) -> Result<(String, bool, Vec<usize>), String> {
+    let text = text.trim();
+    let inner = text
+        .strip_prefix('{')
+        .and_then(|t| t.strip_suffix('}'))
+        .ok_or_else(|| format!("the .npy header `{}` is not a dict", short(text)))?;
+    let mut descr = None;
+    let mut fortran = None;
+    let mut shape = None;
+    let mut rest = inner.trim_start();
+    while !rest.is_empty() {
+        let (key, after) = quoted(rest)?;
+        let after = after
+            .trim_start()
+            .strip_prefix(':')
+            .ok_or_else(|| format!("expected `:` after '{key}' in the .npy header"))?
+            .trim_start();
+        rest =
+            match key.as_str() {
+                "descr" => {
+                    let (v, a) = quoted(after)?;
+                    descr = Some(v);
+                    a
+                }
+                "fortran_order" => {
+                    if let Some(a) = after.strip_prefix("True") {
+                        fortran = Some(true);
+                        a
+                    } else if let Some(a) = after.strip_prefix("False") {
+                        fortran = Some(false);
+                        a
+                    } else {
+                        return Err("fortran_order is neither True nor False".into());
+                    }
+                }
+                "shape" => {
+                    let a = after
+                        .strip_prefix('(')
+                        .ok_or("the shape in the .npy header is not a tuple")?;
+                    let close = a.find(')').ok_or("the shape tuple is not closed")?;
+                    let mut dims = Vec::new();
+                    for part in a[..close].split(',') {
+                        let p = part.trim().trim_end_matches('L');
+                        if p.is_empty() {
+                            continue;
+                        }
+                        dims.push(p.parse::<usize>().map_err(|_| {
+                            format!("shape entry `{p}` is not a non-negative integer")
+                        })?);
+                    }
+                    shape = Some(dims);
+                    &a[close + 1..]
+                }
+                other => return Err(format!("unexpected key '{other}' in the .npy header")),
+            };
+        rest = rest.trim_start();
+        rest = rest.strip_prefix(',').unwrap_or(rest).trim_start();
+    }
+    match (descr, fortran, shape) {
+        (Some(d), Some(f), Some(s)) => Ok((d, f, s)),
+        _ => Err(format!(
+            "the .npy header `{}` lacks one of 'descr', 'fortran_order', 'shape'",
+            short(text)
+        )),
+    }
+}
+
+/// A `'...'` or `"..."` string at the start of `s`, and what follows it.
+fn quoted(s: &str) -> Result<(String, &str), String> {
+    let q = s
+        .chars()
+        .next()
+        .filter(|c| *c == '\'' || *c == '"')
+        .ok_or_else(|| format!("expected a quoted key in the .npy header at `{}`", short(s)))?;
+    let body = &s[1..];
+    let end = body
+        .find(q)
+        .ok_or("unterminated string in the .npy header")?;
+    Ok((body[..end].to_string(), &body[end + 1..]))
+}
+
+fn short(s: &str) -> String {
+    s.chars().take(60).collect()
+}
+
+/// Displays a shape as NumPy does: `(3,)`, `(2, 4)`, `()`.
+struct Shape<'a>(&'a [usize]);
+
+impl fmt::Display for Shape<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            [n] => write!(f, "({n},)"),
+            s => {
+                f.write_str("(")?;
+                for (i, d) in s.iter().enumerate() {
+                    if i > 0 {
+                        f.write_str(", ")?;
+                    }
+                    write!(f, "{d}")?;
+                }
+                f.write_str(")")
+            }
+        }
+    }
+}
+
+/// Displays an expected shape, `*` where any extent is accepted: `(24, *)`.
+struct ShapePattern<'a>(&'a [Option<usize>]);
+
+impl fmt::Display for ShapePattern<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("(")?;
+        for (i, d) in self.0.iter().enumerate() {
+            if i > 0 {
+                f.write_str(", ")?;
+            }
+            match d {
+                Some(n) => write!(f, "{n}")?,
+                None => f.write_str("*")?,
+            }
+        }
+        if self.0.len() == 1 {
+            f.write_str(",")?;
+        }
+        f.write_str(")")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::test_dir::TestDir;
+
+    fn npy_bytes(descr: &str, fortran: bool, shape: &str, data: &[u8]) -> Vec<u8> {
+        let dict = format!(
+            "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}\n",
+            if fortran { "True" } else { "False" }
+        );
+        let mut out = b"\x93NUMPY\x01\x00".to_vec();
+        out.extend_from_slice(&(dict.len() as u16).to_le_bytes());
+        out.extend_from_slice(dict.as_bytes());
+        out.extend_from_slice(data);
+        out
+    }
+
+    fn zip_of(members: &[(&str, Vec<u8>)]) -> Vec<u8> {
+        let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
+        for (name, bytes) in members {
+            zip.start_file(*name, zip::write::SimpleFileOptions::default())
+                .unwrap();
+            zip.write_all(bytes).unwrap();
+        }
+        zip.finish().unwrap().into_inner()
+    }
+
+    #[test]
+    fn arrays_round_trip_with_every_element_type() {
+        let dir = TestDir::new("npz");
+        for compressed in [false, true] {
+            let path = dir.0.join(format!("a{compressed}.npz"));
+            let mut w = NpzWriter::new(compressed);
+            w.add("f", &[2, 3], &[1.0f32, 2.0, 3.0, 4.0, 5.0, -0.25])
+                .unwrap();
+            w.add("d", &[1], &[std::f64::consts::PI]).unwrap();
+            w.add("i", &[2, 2], &[-1i64, 4294967295, 0, 7]).unwrap();
+            w.add("u", &[3], &[1u32, 2, u32::MAX]).unwrap();
+            w.add("b", &[2], &[true, false]).unwrap();
+            w.add("s", &[], &[5i32]).unwrap();
+            w.write(&path).unwrap();
+            let mut npz = Npz::open(&path).unwrap();
+            assert_eq!(npz.keys(), vec!["b", "d", "f", "i", "s", "u"]);
+            let f = npz.floats("f", &[Some(2), None]).unwrap();
+            assert_eq!(f.shape, vec![2, 3]);
+            assert_eq!(f.data[5], -0.25);
+            assert_eq!(
+                npz.floats("d", &[Some(1)]).unwrap().data,
+                vec![std::f64::consts::PI]
+            );
+            assert_eq!(
+                npz.ints("i", &[None, None]).unwrap().data,
+                vec![-1, 4294967295, 0, 7]
+            );
+            assert_eq!(
+                npz.ints("u", &[Some(3)]).unwrap().data[2],
+                i64::from(u32::MAX)
+            );
+            assert_eq!(npz.ints("b", &[Some(2)]).unwrap().data, vec![1, 0]);
+            assert_eq!(npz.ints("s", &[]).unwrap().data, vec![5]);
+        }
+    }
+
+    #[test]
+    fn writing_is_deterministic() {
+        let mut w = NpzWriter::new(true);
+        w.add("x", &[3], &[1.0f32, 2.0, 3.0]).unwrap();
+        assert_eq!(w.to_bytes().unwrap(), w.to_bytes().unwrap());
+    }
+
+    #[test]
+    fn errors_name_file_key_and_expectation() {
+        let dir = TestDir::new("npz-err");
+        let path = dir.0.join("model.npz");
+        let mut w = NpzWriter::new(false);
+        w.add("weights", &[4, 23], &[0.0f32; 92]).unwrap();
+        w.add("f", &[2, 3], &[0.5f64; 6]).unwrap();
+        w.write(&path).unwrap();
+        let mut npz = Npz::open(&path).unwrap();
+        let e = npz
+            .floats("weights", &[Some(4), Some(24)])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("model.npz") && e.contains("`weights` has shape (4, 23); expected (4, 24)"),
+            "{e}"
+        );
+        let e = npz.ints("f", &[None, Some(3)]).unwrap_err().to_string();
+        assert!(
+            e.contains("`f` has dtype '<f8'; expected an integer array"),
+            "{e}"
+        );
+        let e = npz
+            .floats("v_template", &[None, Some(3)])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no array `v_template` (the file has: f, weights)"),
+            "{e}"
+        );
+        let e = npz.floats("weights", &[None]).unwrap_err().to_string();
+        assert!(e.contains("expected (*,)"), "{e}");
+    }
+
+    #[test]
+    fn fortran_order_is_transposed_to_c_order() {
+        // C-order [[1,2,3],[4,5,6]] stored column-major: 1 4 2 5 3 6.
+        let data: Vec<u8> = [1.0f64, 4.0, 2.0, 5.0, 3.0, 6.0]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let bytes = zip_of(&[("a.npy", npy_bytes("<f8", true, "(2, 3)", &data))]);
+        let mut npz = Npz::from_bytes(bytes, Path::new("f.npz")).unwrap();
+        let a = npz.floats("a", &[Some(2), Some(3)]).unwrap();
+        assert_eq!(a.data, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        // Three axes: element (i, j, k) at i + 2 j + 4 k in Fortran order.
+        let shape = [2usize, 2, 3];
+        let f: Vec<u8> = (0..12u8).collect();
+        let c = fortran_to_c(&f, &shape, 1);
+        for i in 0..2 {
+            for j in 0..2 {
+                for k in 0..3 {
+                    assert_eq!(c[i * 6 + j * 3 + k] as usize, i + 2 * j + 4 * k);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn damaged_members_and_archives_are_refused() {
+        let e = Npz::from_bytes(b"PK\x03\x04 nonsense".to_vec(), Path::new("x.npz")).unwrap_err();
+        assert!(
+            e.to_string().starts_with("x.npz: not a readable .npz"),
+            "{e}"
+        );
+        let truncated = zip_of(&[("a.npy", npy_bytes("<f4", false, "(4,)", &[0u8; 12]))]);
+        let mut npz = Npz::from_bytes(truncated, Path::new("t.npz")).unwrap();
+        let e = npz.floats("a", &[Some(4)]).unwrap_err().to_string();
+        assert!(
+            e.contains("`a`: the data has 12 bytes but shape (4,)"),
+            "{e}"
+        );
+        let big = zip_of(&[("a.npy", npy_bytes(">f8", false, "(1,)", &[0u8; 8]))]);
+        let e = Npz::from_bytes(big, Path::new("b.npz"))
+            .unwrap()
+            .floats("a", &[None])
+            .unwrap_err();
+        assert!(e.to_string().contains("big-endian"), "{e}");
+        let strings = zip_of(&[("s.npy", npy_bytes("<U3", false, "()", &[0u8; 12]))]);
+        let e = Npz::from_bytes(strings, Path::new("s.npz"))
+            .unwrap()
+            .floats("s", &[])
+            .unwrap_err();
+        assert!(e.to_string().contains("'<U3' is not supported"), "{e}");
+    }
+
+    #[test]
+    fn a_bad_writer_call_writes_nothing() {
+        let mut w = NpzWriter::new(false);
+        assert!(w.add("x", &[2, 2], &[1.0f32; 3]).is_err());
+        w.add("x", &[1], &[1.0f32]).unwrap();
+        assert!(w.add("x", &[1], &[1.0f32]).is_err());
+    }
+}
