@@ -323,16 +323,23 @@ pub fn validate(mesh: &TriMesh) -> Vec<Finding> {
         }
     }
 
-    // Degenerate: a repeated vertex, or (relatively) zero area.
-    let diag2 = mesh
+    // Degenerate: a repeated vertex, or (relatively) zero area. Edges are divided by the
+    // diagonal first, so neither huge nor tiny coordinates overflow the test.
+    let diag = mesh
         .bounding_box()
         .map(|b| {
             let d = sub(b.max, b.min);
-            dot(d, d)
+            d[0].hypot(d[1]).hypot(d[2])
         })
         .unwrap_or(0.0);
-    // |cross| is twice the area.
-    let max_cross = 2.0 * DEGENERATE_AREA_TOLERANCE * diag2;
+    // |cross| is twice the area. Without a usable diagonal (all vertices coincide, or the
+    // box is infinite) only an exactly zero area counts.
+    let (unit, max_cross) = if diag > 0.0 && diag.is_finite() {
+        (diag, 2.0 * DEGENERATE_AREA_TOLERANCE)
+    } else {
+        (1.0, 0.0)
+    };
+    let scaled = |v: [f64; 3]| [v[0] / unit, v[1] / unit, v[2] / unit];
     let mut repeats = vec![false; mesh.faces.len()];
     for (face, &[a, b, c]) in mesh.faces.iter().enumerate() {
         if !in_range[face] {
@@ -341,7 +348,7 @@ pub fn validate(mesh: &TriMesh) -> Vec<Finding> {
         repeats[face] = a == b || b == c || a == c;
         let degenerate = repeats[face] || {
             let [pa, pb, pc] = [a, b, c].map(|i| mesh.positions[i as usize]);
-            let x = cross(sub(pb, pa), sub(pc, pa));
+            let x = cross(scaled(sub(pb, pa)), scaled(sub(pc, pa)));
             let corners_finite = [a, b, c].iter().all(|&i| finite[i as usize]);
             corners_finite && dot(x, x).sqrt() <= max_cross
         };
@@ -550,6 +557,20 @@ mod tests {
         );
         assert_eq!(f[0].severity(), Severity::Warning);
         assert!(check(&m, Path::new("d.obj")).is_ok());
+    }
+
+    #[test]
+    fn degeneracy_survives_extreme_scales() {
+        for s in [1e-300, 1e-160, 1e160, 1e300] {
+            let mut m = tri();
+            for p in &mut m.positions {
+                *p = p.map(|c| c * s);
+            }
+            assert!(validate(&m).is_empty(), "scale {s}");
+        }
+        let mut point = tri();
+        point.positions = vec![[2.0; 3]; 3];
+        assert_eq!(validate(&point), vec![Finding::DegenerateFace { face: 0 }]);
     }
 
     #[test]

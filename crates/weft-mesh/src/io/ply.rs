@@ -161,10 +161,8 @@ fn parse_header(bytes: &[u8]) -> Result<Header, (usize, String)> {
         let raw = &bytes[pos..pos + len];
         pos += len + 1;
         let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
-        let text = std::str::from_utf8(raw)
-            .map_err(|_| (line, "header line is not text; expected ASCII".to_owned()))?;
         if line == 1 {
-            if text != "ply" {
+            if raw != b"ply" {
                 return Err((
                     line,
                     "not a PLY file; expected `ply` on the first line".to_owned(),
@@ -172,6 +170,8 @@ fn parse_header(bytes: &[u8]) -> Result<Header, (usize, String)> {
             }
             continue;
         }
+        let text = std::str::from_utf8(raw)
+            .map_err(|_| (line, "header line is not text; expected ASCII".to_owned()))?;
         let words: Vec<&str> = text.split_whitespace().collect();
         match words.first().copied() {
             None | Some("comment") | Some("obj_info") => {}
@@ -671,8 +671,10 @@ fn read_body<B: Body>(
                 body,
                 None,
                 format!(
-                    "the header declares {} instances, but only {} bytes follow",
+                    "the header declares {} of them, at least {} bytes each, but only {} \
+                     bytes follow",
                     element.count,
+                    element.min_binary_size(),
                     body.remaining()
                 ),
             ));
@@ -1274,7 +1276,7 @@ mod tests {
             &[0u8; 64],
         );
         assert!(load(&huge).unwrap_err().to_string().contains(
-            "element vertex: the header declares 4000000000 instances, but only 64 bytes follow"
+            "element vertex: the header declares 4000000000 of them, at least 12 bytes each, but only 64 bytes follow"
         ));
         let long_list = ply("binary_little_endian", &format!("element vertex 3\n{XYZ_FLOAT}element face 1\nproperty list uint int vertex_indices\n"), &[[0u8; 36].as_slice(), &[255, 255, 255, 0]].concat());
         assert!(load(&long_list).unwrap_err().to_string().contains("face 0 of 1: property `vertex_indices`: list length 16777215 is negative or longer than the file"));
@@ -1297,7 +1299,7 @@ mod tests {
         assert!(load(&skipped)
             .unwrap_err()
             .to_string()
-            .contains("element junk: the header declares 1000 instances, but only 0 bytes follow"));
+            .contains("element junk: the header declares 1000 of them, at least 8 bytes each, but only 0 bytes follow"));
     }
 
     #[test]
