@@ -5,6 +5,8 @@
 //!
 //! A geometry crate: no learning dependency, so it builds and tests in seconds.
 
+pub mod features;
 pub mod kinematics;
+pub mod query;
 pub mod rotation;
 pub mod skinning;
