@@ -6,6 +6,7 @@
 
 pub mod eccentricity;
 pub mod error;
+pub mod export;
 pub mod geodesic;
 pub mod graph;
 pub mod io;
