@@ -5,8 +5,8 @@
 //!
 //! A geometry crate: no learning dependency, so it builds and tests in seconds.
 
-pub mod features;
+pub mod joints;
 pub mod kinematics;
-pub mod query;
+pub mod motion;
 pub mod rotation;
 pub mod skinning;
