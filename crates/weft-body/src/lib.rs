@@ -5,8 +5,10 @@
 //!
 //! A geometry crate: no learning dependency, so it builds and tests in seconds.
 
+pub mod features;
 pub mod joints;
 pub mod kinematics;
 pub mod motion;
+pub mod query;
 pub mod rotation;
 pub mod skinning;
