@@ -1,0 +1,43 @@
+//! Network layers for weft on burn 0.22.
+//!
+//! - [`gat`]: graph attention on CSR adjacency — the fused CPU kernel with its hand-written
+//!   backward, the generic reference path, and the [`GatBlock`] layer.
+//! - [`adjacency`]: the destination-major adjacency (self-loops, transpose) GAT runs on.
+//! - [`backend`]: the devices (flex CPU by default; wgpu / cuda behind features).
+//! - [`activation`]: the nonlinearities the papers name.
+//! - [`mlp`], [`lstm`]: MLP (with optional batch norm) and stacked LSTM encoders.
+//! - [`pool`]: structure-preserving pooling/unpooling (seed 000) and the learned baselines
+//!   TopKPool, SAGPool, ASAP with unpooling by index.
+//! - [`batch`]: several garments as one disjoint graph ([`GraphBatch`], [`HierarchyBatch`]).
+//! - [`sparse`]: constant sparse × dense products with their transpose backward.
+//! - [`optim`]: Adamax and cosine annealing.
+//! - [`init`]: Glorot for GAT blocks, Kaiming for linear and LSTM layers.
+
+pub mod activation;
+pub mod adjacency;
+pub mod backend;
+pub mod batch;
+pub mod error;
+mod flex;
+pub mod gat;
+pub mod init;
+pub mod lstm;
+pub mod mlp;
+pub mod optim;
+pub mod pool;
+mod real;
+pub mod sparse;
+#[cfg(test)]
+mod testutil;
+
+pub use activation::Activation;
+pub use adjacency::Adjacency;
+pub use batch::{BatchLevel, GraphBatch, HierarchyBatch};
+pub use error::{NnError, Result};
+pub use gat::{AttentionImpl, GatBlock, GatBlockConfig, HeadMerge};
+pub use lstm::{LstmEncoder, LstmEncoderConfig};
+pub use mlp::{Mlp, MlpConfig};
+pub use optim::{cosine_annealing, Adamax, AdamaxConfig};
+pub use sparse::{sparse_matmul, SparseImpl, SparseMatrix};
+
+pub use burn;
