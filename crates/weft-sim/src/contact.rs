@@ -1,0 +1,164 @@
+//! Body contacts as plain data: for a garment vertex, the closest point on the body and
+//! the body's outward normal there, at the current body state.
+//!
+//! The body and its closest-point queries live elsewhere (weft-body); the collision and
+//! friction energies only see these records, which keeps them pure functions of the
+//! positions. The simulator refreshes them (each step, from the positions at the start
+//! of the step, as HOOD does) through the small [`BodyProximity`] trait, which weft-body
+//! can implement and which the analytic [`Plane`] and [`Sphere`] here implement for tests.
+
+use crate::error::{check_vertex, SimError};
+use crate::math::{finite3, v3};
+
+/// The closest body point to a garment vertex and the body's outward unit normal there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyContact {
+    /// Closest point on the body, m.
+    pub point: [f64; 3],
+    /// Outward unit normal of the body at `point`.
+    pub normal: [f64; 3],
+}
+
+impl BodyContact {
+    /// The signed distance of `x` along the normal: `(x − p)·n` (positive outside).
+    pub fn signed_distance(&self, x: [f64; 3]) -> f64 {
+        (0..3)
+            .map(|k| (x[k] - self.point[k]) * self.normal[k])
+            .sum()
+    }
+}
+
+/// A contact of one garment vertex.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VertexContact {
+    /// The garment vertex.
+    pub vertex: u32,
+    /// Its body contact.
+    pub contact: BodyContact,
+}
+
+/// Checks vertex indices and finiteness and normalises the normals.
+pub(crate) fn validate_contacts(
+    mut contacts: Vec<VertexContact>,
+    vertex_count: usize,
+) -> Result<Vec<VertexContact>, SimError> {
+    for (i, c) in contacts.iter_mut().enumerate() {
+        check_vertex("contact", i, c.vertex, vertex_count)?;
+        c.contact.normal = unit(c.contact.normal, || format!("contact {i} normal"))?;
+        if !finite3(c.contact.point) {
+            return Err(SimError::InvalidVector {
+                what: format!("contact {i} point"),
+                message: "not finite",
+            });
+        }
+    }
+    Ok(contacts)
+}
+
+/// `n / |n|`, an error for a zero or non-finite vector.
+pub(crate) fn unit(n: [f64; 3], what: impl Fn() -> String) -> Result<[f64; 3], SimError> {
+    let l = v3(n).norm();
+    if !(l.is_finite() && l > 0.0) {
+        return Err(SimError::InvalidVector {
+            what: what(),
+            message: "expected a finite, non-zero direction",
+        });
+    }
+    Ok(n.map(|c| c / l))
+}
+
+/// Closest-point queries against a body at one instant.
+pub trait BodyProximity {
+    /// The closest body point to `x` and the outward normal there, `None` when the body
+    /// is farther than the query cares about (no contact).
+    fn closest(&self, x: [f64; 3]) -> Option<BodyContact>;
+}
+
+/// An infinite plane (a floor), outward normal `normal`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    /// A point on the plane.
+    pub point: [f64; 3],
+    /// Outward unit normal.
+    pub normal: [f64; 3],
+}
+
+impl BodyProximity for Plane {
+    fn closest(&self, x: [f64; 3]) -> Option<BodyContact> {
+        let d: f64 = (0..3)
+            .map(|k| (x[k] - self.point[k]) * self.normal[k])
+            .sum();
+        Some(BodyContact {
+            point: std::array::from_fn(|k| x[k] - d * self.normal[k]),
+            normal: self.normal,
+        })
+    }
+}
+
+/// A sphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre, m.
+    pub center: [f64; 3],
+    /// Radius, m.
+    pub radius: f64,
+}
+
+impl BodyProximity for Sphere {
+    fn closest(&self, x: [f64; 3]) -> Option<BodyContact> {
+        let d = v3(x) - v3(self.center);
+        let l = d.norm();
+        if !(l > 0.0 && l.is_finite()) {
+            return None;
+        }
+        let n = d / l;
+        Some(BodyContact {
+            point: std::array::from_fn(|k| self.center[k] + self.radius * n[k]),
+            normal: [n.x, n.y, n.z],
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn analytic_bodies() {
+        let s = Sphere {
+            center: [0.0, 1.0, 0.0],
+            radius: 0.5,
+        };
+        let c = s.closest([0.0, 3.0, 0.0]).unwrap();
+        assert_eq!(c.point, [0.0, 1.5, 0.0]);
+        assert!((c.signed_distance([0.0, 3.0, 0.0]) - 1.5).abs() < 1e-15);
+        assert!(s.closest([0.0, 1.0, 0.0]).is_none());
+        let p = Plane {
+            point: [0.0; 3],
+            normal: [0.0, 1.0, 0.0],
+        };
+        assert!(
+            (p.closest([1.0, -0.2, 3.0])
+                .unwrap()
+                .signed_distance([1.0, -0.2, 3.0])
+                + 0.2)
+                .abs()
+                < 1e-15
+        );
+    }
+
+    #[test]
+    fn validation_normalises_and_rejects() {
+        let c = |n| VertexContact {
+            vertex: 0,
+            contact: BodyContact {
+                point: [0.0; 3],
+                normal: n,
+            },
+        };
+        let v = validate_contacts(vec![c([0.0, 2.0, 0.0])], 1).unwrap();
+        assert_eq!(v[0].contact.normal, [0.0, 1.0, 0.0]);
+        assert!(validate_contacts(vec![c([0.0; 3])], 1).is_err());
+        assert!(validate_contacts(vec![c([0.0, 1.0, 0.0])], 0).is_err());
+    }
+}

@@ -1,0 +1,53 @@
+//! Cloth physics for weft: materials, the energies of the incremental potential with
+//! exact gradients and Hessians, and the implicit-Euler simulator built on them.
+//!
+//! Seed 004 (HOOD) eq. 5 sums StVK stretching ([`Stretch`]), dihedral bending
+//! ([`Bending`]), gravity ([`Gravity`]), friction ([`Friction`]), a cubic collision
+//! penalty ([`CubicCollision`]) and implicit-Euler inertia ([`Inertia`]) into the
+//! incremental potential ([`IncrementalPotential`]); minimising it over the end-of-step
+//! positions is one implicit-Euler step, and its value is HOOD's self-supervised loss.
+//! Seed 000's unsupervised losses (supplement eq. 4–8) are in [`multilevel_losses`].
+//!
+//! Every energy implements [`Energy`]: value, gradient, and a Hessian, exact or
+//! projected to positive semi-definite per element ([`HessianKind`]), scattered into a
+//! 3×3-block sparse matrix ([`BlockCsr`]) whose product and diagonal blocks feed
+//! preconditioned conjugate gradients. Positions are plain `&[[f64; 3]]` so the networks
+//! can evaluate losses on `f64` copies of their predictions. Body contacts are plain data
+//! ([`BodyContact`]); the body itself lives in weft-body.
+//!
+//! Physics is `f64`, metres, seconds, kilograms, Y up. Derivations, equation numbers and
+//! material sources: `docs/physics.md`.
+
+pub mod bending;
+pub mod collision;
+pub mod contact;
+pub mod energy;
+pub mod error;
+pub mod friction;
+pub mod gravity;
+pub mod inertia;
+pub mod material;
+mod math;
+pub mod membrane;
+pub mod multilevel_losses;
+pub mod potential;
+pub mod sparse;
+pub mod stretch;
+
+#[cfg(test)]
+mod fd_tests;
+
+pub use bending::{Bending, BendingScale, RestAngle};
+pub use collision::CubicCollision;
+pub use contact::{BodyContact, BodyProximity, Plane, Sphere, VertexContact};
+pub use energy::{gradient_of, hessian_of, hessian_pattern_of, Energy, HessianKind};
+pub use error::SimError;
+pub use friction::{Friction, FrictionContact};
+pub use gravity::{lumped_masses, Gravity, STANDARD_GRAVITY};
+pub use inertia::{inertial_target, Inertia};
+pub use material::Material;
+pub use membrane::RestFrames;
+pub use multilevel_losses::{LinearCollision, MultilevelWeights, UvShear, UvStretch};
+pub use potential::{IncrementalPotential, Term, WeightedTerm};
+pub use sparse::{BlockCsr, PatternBuilder};
+pub use stretch::{Stretch, StretchParams};
