@@ -9,6 +9,25 @@ use weft_render::{
     Series, View, BODY_COLOR,
 };
 
+/// A 1-D little-endian float64 `.npy` file.
+fn write_npy_f64(path: &std::path::Path, values: &[f64]) -> std::io::Result<()> {
+    let mut header = format!(
+        "{{'descr': '<f8', 'fortran_order': False, 'shape': ({},), }}",
+        values.len()
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    bytes.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    for v in values {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    weft_mesh::io::write_atomic(path, |w| w.write_all(&bytes))
+}
+
 #[path = "../tests/support/mod.rs"]
 mod support;
 
@@ -230,6 +249,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "animation (APNG)",
     )?;
     report.write(&out.join("report.html"))?;
+
+    // Inputs for trying `weft render` by hand.
+    weft_mesh::io::write_obj(&out.join("body.obj"), &body)?;
+    weft_mesh::io::write_obj(&out.join("skirt.obj"), &skirt)?;
+    write_npy_f64(&out.join("skirt_error_mm.npy"), &error)?;
     println!("wrote {}", out.display());
     Ok(())
 }
