@@ -156,6 +156,47 @@ mod tests {
         assert_eq!(count(&t, [255, 0, 0]), 100);
     }
 
+    proptest::proptest! {
+        /// A jittered grid of triangles tiling a square covers every pixel centre inside
+        /// the square exactly once, whatever the jitter.
+        #[test]
+        fn a_triangulated_square_covers_each_pixel_exactly_once(
+            jitter in proptest::collection::vec((-0.3f64..0.3, -0.3f64..0.3), 25),
+        ) {
+            let n = 4usize;
+            let (lo, hi) = (2.3, 29.7);
+            let cell = (hi - lo) / n as f64;
+            let vertex = |i: usize, j: usize| {
+                let (mut x, mut y) = (lo + i as f64 * cell, lo + j as f64 * cell);
+                if i > 0 && i < n && j > 0 && j < n {
+                    let (dx, dy) = jitter[j * (n + 1) + i];
+                    x += dx * cell;
+                    y += dy * cell;
+                }
+                [x, y, 1.0]
+            };
+            let mut hits = vec![0u32; 32 * 32];
+            for j in 0..n {
+                for i in 0..n {
+                    let (a, b, c, d) = (vertex(i, j), vertex(i + 1, j), vertex(i + 1, j + 1), vertex(i, j + 1));
+                    for tri in [[a, b, c], [a, c, d]] {
+                        let mut t = Target::new(32, 32, [0; 3]);
+                        t.triangle(tri, |_| [1, 1, 1]);
+                        for (h, c) in hits.iter_mut().zip(&t.color) {
+                            *h += u32::from(*c == [1, 1, 1]);
+                        }
+                    }
+                }
+            }
+            for y in 0..32 {
+                for x in 0..32 {
+                    let inside = (2..=29).contains(&x) && (2..=29).contains(&y);
+                    proptest::prop_assert_eq!(hits[y * 32 + x], u32::from(inside), "pixel {} {}", x, y);
+                }
+            }
+        }
+    }
+
     #[test]
     fn nearer_surface_wins_in_either_order() {
         let near = [[0.0, 0.0, 1.0], [10.0, 0.0, 1.0], [0.0, 10.0, 1.0]];
