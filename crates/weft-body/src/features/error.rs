@@ -76,6 +76,9 @@ pub enum FeatureError {
         /// Frames available.
         frames: usize,
     },
+    /// Posing the body model failed (its message).
+    #[error("posing the body: {0}")]
+    Posing(String),
     /// A spatial query failed (bad mesh or point).
     #[error(transparent)]
     Query(#[from] QueryError),

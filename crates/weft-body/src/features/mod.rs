@@ -16,6 +16,7 @@
 //! consume. Wrong input (mismatched lengths, NaN, negative weights, bad parents) is a
 //! [`FeatureError`], never a panic. Design notes: `docs/body-features.md`.
 
+pub mod body;
 pub mod descriptor;
 pub mod diffusion;
 pub mod distances;
@@ -26,6 +27,7 @@ pub mod velocity;
 pub mod volumetric;
 pub mod weights;
 
+pub use body::{descriptor_from_transforms, rotations_of};
 pub use descriptor::{
     descriptor_for_pose, joint_rotations, relative_rotations, relative_skinning_descriptor,
     rodrigues, Rotation,

@@ -10,9 +10,11 @@
 //! zero too (the same convention as the pose history `Θ^t`, whose root translation
 //! relative to the previous frame is zero at the start).
 //!
-//! Layout. A window ending at frame `t` holds `m` frames, **oldest first**
-//! (`t − m + 1, …, t`), each `N_b × 3`; [`VelocityWindow::to_f32`] flattens it to
-//! `m × 3N_b`, one LSTM time step per row.
+//! Layout. A window at frame `t` holds `m` frames, **current frame first**
+//! (`t, t − 1, …, t − m + 1`, clamped at frame 0), each `N_b × 3` — the order of the
+//! pose history `Θ^t` in [`crate::motion::pose_history`], as the paper writes both sets;
+//! an LSTM that reads oldest first iterates the slots in reverse.
+//! [`VelocityWindow::to_f32`] flattens it to `m × 3N_b`, one time step per row.
 
 use super::distances::check_points;
 use super::error::FeatureError;
@@ -23,7 +25,8 @@ use crate::query::vec3::{scale, sub};
 pub struct VelocityWindow {
     frames: usize,
     vertices: usize,
-    /// Frame-major: `data[k * vertices + i]` is vertex `i` in window slot `k`.
+    /// Slot-major: `data[k * vertices + i]` is vertex `i` in window slot `k` (frame
+    /// `max(t − k, 0)`).
     data: Vec<[f64; 3]>,
 }
 
@@ -38,13 +41,14 @@ impl VelocityWindow {
         self.vertices
     }
 
-    /// Velocities (m/s) of window slot `k` (0 = oldest), one per vertex. Panics if
+    /// Velocities (m/s) of window slot `k` (0 = the current frame `t`, `k` = frame
+    /// `max(t − k, 0)`), one per vertex. Panics if
     /// `k >= frame_count()`, like slice indexing.
     pub fn frame(&self, k: usize) -> &[[f64; 3]] {
         &self.data[k * self.vertices..(k + 1) * self.vertices]
     }
 
-    /// All velocities, frame-major, oldest first.
+    /// All velocities, slot-major, current frame first.
     pub fn as_slice(&self) -> &[[f64; 3]] {
         &self.data
     }
@@ -68,8 +72,9 @@ pub fn vertex_velocities<V: AsRef<[[f64; 3]]>>(
         .collect())
 }
 
-/// The window of `m` velocity frames ending at frame `t` (inclusive), oldest first:
-/// seed 000's `V^t`. Slots before frame 0 are zero (body at rest before the motion).
+/// The window of `m` velocity frames at frame `t`, current first (slot `k` = frame
+/// `max(t − k, 0)`): seed 000's `V^t`. Slots before the start repeat frame 0, whose
+/// velocity is zero (body at rest before the motion).
 pub fn velocity_window<V: AsRef<[[f64; 3]]>>(
     frames: &[V],
     fps: f64,
@@ -93,11 +98,7 @@ pub fn velocity_window<V: AsRef<[[f64; 3]]>>(
     let n = frames[0].as_ref().len();
     let mut data = Vec::with_capacity(m * n);
     for k in 0..m {
-        // Slot k holds frame t − (m − 1 − k).
-        match (t + k + 1).checked_sub(m) {
-            Some(frame) => data.extend(velocity_at(frames, fps, frame)),
-            None => data.extend(std::iter::repeat([0.0; 3]).take(n)),
-        }
+        data.extend(velocity_at(frames, fps, t.saturating_sub(k)));
     }
     Ok(VelocityWindow {
         frames: m,
@@ -162,9 +163,9 @@ mod tests {
         }
         let w = velocity_window(&frames, 30.0, 1, 3).unwrap();
         assert_eq!(w.frame_count(), 3);
-        assert_eq!(w.frame(0), &[[0.0; 3]]); // before the motion
+        assert!((w.frame(0)[0][0] - 3.0).abs() < 1e-9); // frame 1
         assert_eq!(w.frame(1), &[[0.0; 3]]); // frame 0
-        assert!((w.frame(2)[0][0] - 3.0).abs() < 1e-9); // frame 1
+        assert_eq!(w.frame(2), &[[0.0; 3]]); // before the motion: frame 0 again
         assert_eq!(w.to_f32().len(), 9);
         assert!(velocity_window(&frames, 30.0, 5, 3).is_err());
         assert!(velocity_window(&frames, 0.0, 1, 3).is_err());
