@@ -31,6 +31,7 @@ mod math;
 pub mod membrane;
 pub mod multilevel_losses;
 pub mod potential;
+pub mod solver;
 pub mod sparse;
 pub mod stretch;
 
@@ -49,5 +50,6 @@ pub use material::Material;
 pub use membrane::RestFrames;
 pub use multilevel_losses::{LinearCollision, MultilevelWeights, UvShear, UvStretch};
 pub use potential::{IncrementalPotential, Term, WeightedTerm};
+pub use solver::{ClothSimulator, NewtonOptions, SimOptions};
 pub use sparse::{BlockCsr, PatternBuilder};
 pub use stretch::{Stretch, StretchParams};
