@@ -28,7 +28,9 @@ pub struct Material {
     /// Shell thickness, m.
     pub thickness: f64,
     /// Bending stiffness `k_b` of the dihedral energy in HOOD's scaling
-    /// ([`crate::BendingScale::Hood`]), N·m.
+    /// ([`crate::BendingScale::Hood`]), N·m. For a bending rigidity `B` (N·m, e.g. from
+    /// the Kawabata B value), `k_b ≈ 4B` on regular meshes (the cylinder calibration in
+    /// `docs/physics.md`).
     pub bending_stiffness: f64,
     /// Garment–body friction coefficient μ.
     pub friction: f64,
@@ -61,7 +63,7 @@ impl Material {
             young_modulus: 2.0e6,
             poisson_ratio: 0.3,
             thickness: 1.5e-4,
-            bending_stiffness: 3.0e-6,
+            bending_stiffness: 8.0e-6,
             friction: 0.3,
         }
     }
@@ -74,7 +76,7 @@ impl Material {
             young_modulus: 3.0e6,
             poisson_ratio: 0.3,
             thickness: 3.5e-4,
-            bending_stiffness: 1.0e-5,
+            bending_stiffness: 3.1e-5,
             friction: 0.5,
         }
     }
@@ -87,7 +89,7 @@ impl Material {
             young_modulus: 4.0e5,
             poisson_ratio: 0.4,
             thickness: 6.0e-4,
-            bending_stiffness: 6.0e-6,
+            bending_stiffness: 1.6e-5,
             friction: 0.5,
         }
     }
@@ -100,7 +102,7 @@ impl Material {
             young_modulus: 6.0e6,
             poisson_ratio: 0.25,
             thickness: 7.0e-4,
-            bending_stiffness: 1.2e-4,
+            bending_stiffness: 3.9e-4,
             friction: 0.6,
         }
     }
@@ -109,11 +111,11 @@ impl Material {
     pub fn leather() -> Self {
         Material {
             name: "leather",
-            density: 0.85,
+            density: 0.9,
             young_modulus: 2.0e7,
             poisson_ratio: 0.35,
             thickness: 1.1e-3,
-            bending_stiffness: 6.0e-4,
+            bending_stiffness: 2.0e-3,
             friction: 0.6,
         }
     }
