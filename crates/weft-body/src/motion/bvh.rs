@@ -109,6 +109,15 @@ pub struct BvhJoint {
     pub line: usize,
 }
 
+/// Where a BVH skeleton's joints and end sites are in its rest pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RestPositions {
+    /// One position per joint, in [`Bvh::joints`] order.
+    pub joints: Vec<Vector3<f64>>,
+    /// `(joint, position)` of every end site.
+    pub end_sites: Vec<(usize, Vector3<f64>)>,
+}
+
 /// A parsed BVH file: the skeleton and the channel values of every frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bvh {
@@ -153,11 +162,7 @@ impl Bvh {
             first_channel.push(channel_count);
             channel_count += joint.channels.len();
         }
-        let frame_count = if channel_count == 0 {
-            0
-        } else {
-            values.len() / channel_count
-        };
+        let frame_count = values.len().checked_div(channel_count).unwrap_or(0);
         if channel_count == 0 || values.len() != frame_count * channel_count {
             return Err(MotionError::Invalid(format!(
                 "{} BVH values for {channel_count} channels; expected a whole number of frames of at least one channel",
@@ -276,20 +281,20 @@ impl Bvh {
         out
     }
 
-    /// Rest-pose (all channels zero, offsets only) positions of the joints, and of the
-    /// end sites as `(joint, position)` pairs, in the file's frame and units.
-    pub fn rest_positions(&self) -> (Vec<Vector3<f64>>, Vec<(usize, Vector3<f64>)>) {
+    /// Rest-pose (all channels zero, offsets only) positions of the joints and the end
+    /// sites, in the file's frame and units.
+    pub fn rest_positions(&self) -> RestPositions {
         let mut joints: Vec<Vector3<f64>> = Vec::with_capacity(self.joints.len());
-        let mut ends = Vec::new();
+        let mut end_sites = Vec::new();
         for (j, joint) in self.joints.iter().enumerate() {
             let base = joint.parent.map_or_else(Vector3::zeros, |p| joints[p]);
             let here = base + Vector3::from(joint.offset);
             for e in &joint.end_sites {
-                ends.push((j, here + Vector3::from(*e)));
+                end_sites.push((j, here + Vector3::from(*e)));
             }
             joints.push(here);
         }
-        (joints, ends)
+        RestPositions { joints, end_sites }
     }
 
     /// Writes the file text: tab-indented hierarchy, one line per frame, numbers with
@@ -305,8 +310,11 @@ impl Bvh {
                 None => roots.push(j),
             }
         }
+        // The file lists joints depth first, and frame values follow that order, which
+        // need not be the order of `joints` (SMPL's is not depth first).
+        let mut order = Vec::with_capacity(self.joints.len());
         for r in roots {
-            self.write_joint(&mut s, r, 0, &children);
+            self.write_joint(&mut s, r, 0, &children, &mut order);
         }
         let _ = writeln!(s, "MOTION\nFrames: {}", self.frame_count);
         let _ = writeln!(s, "Frame Time: {}", self.frame_time);
@@ -314,11 +322,15 @@ impl Bvh {
         let mut line = String::new();
         for f in 0..self.frame_count {
             line.clear();
-            for (k, &v) in self.frame(f).iter().enumerate() {
-                if k > 0 {
-                    line.push(' ');
+            let frame = self.frame(f);
+            for &j in &order {
+                let start = self.first_channel[j];
+                for &v in &frame[start..start + self.joints[j].channels.len()] {
+                    if !line.is_empty() {
+                        line.push(' ');
+                    }
+                    push_number(&mut line, v);
                 }
-                push_number(&mut line, v);
             }
             line.push('\n');
             w.write_all(line.as_bytes())?;
@@ -332,7 +344,15 @@ impl Bvh {
             .map_err(|e| MotionError::io(path, e))
     }
 
-    fn write_joint(&self, s: &mut String, j: usize, depth: usize, children: &[Vec<usize>]) {
+    fn write_joint(
+        &self,
+        s: &mut String,
+        j: usize,
+        depth: usize,
+        children: &[Vec<usize>],
+        order: &mut Vec<usize>,
+    ) {
+        order.push(j);
         let joint = &self.joints[j];
         let pad = "\t".repeat(depth);
         let keyword = if joint.parent.is_none() {
@@ -348,7 +368,7 @@ impl Bvh {
         }
         s.push('\n');
         for &c in &children[j] {
-            self.write_joint(s, c, depth + 1, children);
+            self.write_joint(s, c, depth + 1, children, order);
         }
         for e in &joint.end_sites {
             let _ = writeln!(s, "{pad}\tEnd Site\n{pad}\t{{");
@@ -775,9 +795,9 @@ Frame Time: 0.033333
         assert_eq!((b.channel_count(), b.frame_count()), (9, 2));
         assert_eq!(b.fps(), 30.0);
         assert_eq!(b.frame(1)[3], 90.0);
-        let (rest, ends) = b.rest_positions();
-        assert_eq!(rest[1], Vector3::new(0.0, -10.0, 0.0));
-        assert_eq!(ends, vec![(1, Vector3::new(0.0, -20.0, 0.0))]);
+        let rest = b.rest_positions();
+        assert_eq!(rest.joints[1], Vector3::new(0.0, -10.0, 0.0));
+        assert_eq!(rest.end_sites, vec![(1, Vector3::new(0.0, -20.0, 0.0))]);
     }
 
     #[test]
@@ -814,6 +834,42 @@ Frame Time: 0.033333
             text.contains("\tJOINT Leg\n\t{\n\t\tOFFSET 0 -10 0\n"),
             "{text}"
         );
+    }
+
+    #[test]
+    fn joints_in_any_parent_first_order_are_written_depth_first() {
+        let joint = |name: &str, parent, offset| BvhJoint {
+            name: name.into(),
+            parent,
+            offset,
+            channels: vec![Channel::Zrotation, Channel::Xrotation],
+            end_sites: vec![],
+            line: 0,
+        };
+        // Not depth first: B (a root child) comes before A's child A1.
+        let joints = vec![
+            joint("R", None, [0.0; 3]),
+            joint("A", Some(0), [1.0, 0.0, 0.0]),
+            joint("B", Some(0), [-1.0, 0.0, 0.0]),
+            joint("A1", Some(1), [0.0, 1.0, 0.0]),
+        ];
+        let values = vec![10.0, 1.0, 20.0, 2.0, 30.0, 3.0, 40.0, 4.0];
+        let b = Bvh::new(joints, 0.5, values).unwrap();
+        let mut out = Vec::new();
+        b.write_to(&mut out).unwrap();
+        let again = Bvh::parse(&out, Path::new("o.bvh")).unwrap();
+        let names: Vec<&str> = again.joints().iter().map(|j| j.name.as_str()).collect();
+        assert_eq!(names, ["R", "A", "A1", "B"]);
+        assert_eq!(
+            again.frame(0),
+            &[10.0, 1.0, 20.0, 2.0, 40.0, 4.0, 30.0, 3.0]
+        );
+        let (g, h) = (b.global_transforms(0), again.global_transforms(0));
+        for (j, joint) in b.joints().iter().enumerate() {
+            let k = again.joint_index(&joint.name).unwrap();
+            assert!((g[j].translation.vector - h[k].translation.vector).norm() < 1e-12);
+            assert!(g[j].rotation.angle_to(&h[k].rotation) < 1e-12);
+        }
     }
 
     #[test]

@@ -33,6 +33,10 @@ pub enum MotionError {
         /// What was found and what was expected.
         message: String,
     },
+    /// An `.npz` archive does not read (not a zip, a damaged member, a missing array, an
+    /// array of the wrong type or shape), as reported by the `.npz` reader.
+    #[error(transparent)]
+    NpzFile(#[from] weft_mesh::io::npz::NpzError),
     /// An AMASS-style `.npz` archive is not a motion: a key is missing, an array has the
     /// wrong shape or type, or holds non-finite numbers. `key` is empty when the archive
     /// as a whole is at fault.
@@ -108,7 +112,7 @@ impl fmt::Display for LineSuffix {
     }
 }
 
-/// Formats `: key 'NAME'` after the path, or nothing for an empty key.
+/// Formats ``: `NAME` `` after the path, or nothing for an empty key.
 struct KeySuffix<'a>(&'a str);
 
 impl fmt::Display for KeySuffix<'_> {
@@ -116,7 +120,7 @@ impl fmt::Display for KeySuffix<'_> {
         if self.0.is_empty() {
             Ok(())
         } else {
-            write!(f, ": key '{}'", self.0)
+            write!(f, ": `{}`", self.0)
         }
     }
 }
@@ -133,7 +137,7 @@ mod tests {
         let e = MotionError::bvh(Path::new("a.bvh"), 0, "no frames");
         assert_eq!(e.to_string(), "a.bvh: no frames");
         let e = MotionError::npz(Path::new("m.npz"), "poses", "wrong shape");
-        assert_eq!(e.to_string(), "m.npz: key 'poses': wrong shape");
+        assert_eq!(e.to_string(), "m.npz: `poses`: wrong shape");
         let e = MotionError::npz(Path::new("m.npz"), "", "not a zip archive");
         assert_eq!(e.to_string(), "m.npz: not a zip archive");
     }

@@ -227,8 +227,13 @@ pub fn retarget_bvh(
     let mut warnings = Vec::new();
 
     // Units and frame change.
-    let (rest_file, ends) = bvh.rest_positions();
-    let raw_extent = extent(rest_file.iter().chain(ends.iter().map(|(_, p)| p)));
+    let rest_file = bvh.rest_positions();
+    let raw_extent = extent(
+        rest_file
+            .joints
+            .iter()
+            .chain(rest_file.end_sites.iter().map(|(_, p)| p)),
+    );
     let (unit, k) = match options.units {
         BvhUnits::MetresPerUnit(f) if f.is_finite() && f > 0.0 => ("given", f),
         BvhUnits::MetresPerUnit(f) => {
@@ -245,7 +250,7 @@ pub fn retarget_bvh(
         ));
     }
     let c = options.up.to_y_up();
-    let rest: Vec<Vector3<f64>> = rest_file.iter().map(|p| c * p * k).collect();
+    let rest: Vec<Vector3<f64>> = rest_file.joints.iter().map(|p| c * p * k).collect();
     let target = |j: usize| Vector3::from(options.rest_joints[j]);
 
     // Alignments: SMPL rest bone → source rest bone.

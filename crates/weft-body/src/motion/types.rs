@@ -144,11 +144,6 @@ impl Motion {
         Motion::new(self.fps, self.poses, self.trans, betas)
     }
 
-    /// The arrays: `(fps, poses, trans, betas)`.
-    pub fn into_parts(self) -> (f64, Vec<Pose>, Vec<[f32; 3]>, Option<Vec<f32>>) {
-        (self.fps, self.poses, self.trans, self.betas)
-    }
-
     /// The largest rotation and translation differences between two motions with the
     /// same number of frames, frame by frame; `None` when the frame counts differ.
     /// Rotations are compared as rotations (the angle of `q₁⁻¹ q₂`), so the two
