@@ -299,7 +299,7 @@ fn an_absurd_frame_count_in_the_header_is_refused_without_allocating() {
     let dir = TempDir::new("absurd");
     let mut w = NpzWriter::new(false);
     w.add("poses", &[5, 72], &vec![0.0f64; 360]).unwrap();
-    w.add("trans", &[5, 3], &vec![0.0f64; 15]).unwrap();
+    w.add("trans", &[5, 3], &[0.0f64; 15]).unwrap();
     w.add("mocap_framerate", &[], &[30.0f64]).unwrap();
     let mut bytes = w.to_bytes().unwrap();
     // The poses member: magic, version, header length, header, 360 doubles.

@@ -69,14 +69,14 @@ fn max_velocity_jump(m: &Motion) -> (f64, f64) {
     let p = m.poses();
     let t = m.trans();
     for f in 1..m.frame_count() - 1 {
-        for j in 0..24 {
-            let v0 = (q(p[f - 1][j]).inverse() * q(p[f][j])).scaled_axis() / dt;
-            let v1 = (q(p[f][j]).inverse() * q(p[f + 1][j])).scaled_axis() / dt;
+        for ((a, b), c) in p[f - 1].iter().zip(&p[f]).zip(&p[f + 1]) {
+            let v0 = (q(*a).inverse() * q(*b)).scaled_axis() / dt;
+            let v1 = (q(*b).inverse() * q(*c)).scaled_axis() / dt;
             rot = rot.max((v1 - v0).norm());
         }
-        for k in 0..3 {
-            let v0 = f64::from(t[f][k] - t[f - 1][k]) / dt;
-            let v1 = f64::from(t[f + 1][k] - t[f][k]) / dt;
+        for ((a, b), c) in t[f - 1].iter().zip(&t[f]).zip(&t[f + 1]) {
+            let v0 = f64::from(b - a) / dt;
+            let v1 = f64::from(c - b) / dt;
             lin = lin.max((v1 - v0).abs());
         }
     }

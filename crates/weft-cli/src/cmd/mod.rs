@@ -1,6 +1,7 @@
 //! Subcommands, one module each.
 
 mod mesh;
+mod motion;
 
 use clap::Subcommand;
 
@@ -9,11 +10,15 @@ pub enum Command {
     /// Inspect meshes and build their multilevel graph hierarchies.
     #[command(subcommand)]
     Mesh(mesh::MeshCommand),
+    /// Generate procedural motions and inspect motion files (AMASS .npz, BVH).
+    #[command(subcommand)]
+    Motion(motion::MotionCommand),
 }
 
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Mesh(c) => mesh::run(c),
+        Command::Motion(c) => motion::run(c),
     }
 }
 

@@ -1,0 +1,314 @@
+//! `weft motion generate` and `weft motion info`.
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand, ValueEnum};
+use serde_json::json;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use weft_body::motion::{
+    generate, motion_stats, read_motion, write_motion, BvhUnits, MapChoice, MotionFileOptions,
+    MotionFormat, MotionKind, MotionSource, NameMap, ProceduralParams, SkeletonPreset, UpAxis,
+};
+
+use super::emit;
+
+#[derive(Subcommand)]
+pub enum MotionCommand {
+    /// Generate a procedural motion (walk, run, jump, dance, kick, raise-arms, twist, bow)
+    /// and write it as AMASS-style .npz or as BVH on the SMPL skeleton.
+    Generate(GenerateArgs),
+    /// Frames, frame rate, duration, range of motion per joint and root path of an .npz
+    /// or .bvh motion (BVH files are retargeted to SMPL's 24 joints first).
+    Info(InfoArgs),
+}
+
+/// An up axis on the command line.
+#[derive(Clone, Copy, ValueEnum)]
+enum Up {
+    Y,
+    Z,
+}
+
+impl From<Up> for UpAxis {
+    fn from(u: Up) -> Self {
+        match u {
+            Up::Y => UpAxis::Y,
+            Up::Z => UpAxis::Z,
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct GenerateArgs {
+    /// The motion: walk, run, jump, dance, kick, raise-arms, twist or bow.
+    #[arg(long, value_parser = parse_kind)]
+    kind: MotionKind,
+    /// Number of frames.
+    #[arg(long, default_value_t = 120)]
+    frames: usize,
+    /// Frames per second.
+    #[arg(long, default_value_t = 30.0)]
+    fps: f64,
+    /// Seed of the small random variations (phase, tempo, amplitude, posture).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Forward speed in m/s for walk (default 1.2) and run (default 3.0); a tempo factor
+    /// for the other kinds (default 1).
+    #[arg(long)]
+    speed: Option<f64>,
+    /// Scales every joint excursion; 1 is natural, 0 stands still, at most 3.
+    #[arg(long, default_value_t = 1.0)]
+    amplitude: f64,
+    /// Output file: .npz (AMASS layout) or .bvh (SMPL skeleton, metres, Y up).
+    #[arg(long)]
+    out: PathBuf,
+    /// Up axis of an .npz output: z as AMASS stores it, or y as weft works.
+    #[arg(long, value_enum, default_value_t = Up::Z)]
+    npz_up: Up,
+}
+
+#[derive(Args)]
+pub struct InfoArgs {
+    /// An .npz (AMASS layout) or .bvh motion.
+    file: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+    /// The file's up axis (default: z for .npz as in AMASS, y for .bvh).
+    #[arg(long, value_enum)]
+    up: Option<Up>,
+    /// BVH joint-name map: a preset (smpl, mixamo, cmu, mpfb) or a .toml/.json file of
+    /// BVH name = SMPL name; default: the preset that fits the file best.
+    #[arg(long)]
+    map: Option<String>,
+    /// BVH length unit in metres per file unit (0.01 for centimetres); default: guessed
+    /// from the skeleton's size.
+    #[arg(long)]
+    scale: Option<f64>,
+    /// Frame rate for an .npz that records none.
+    #[arg(long)]
+    fps: Option<f64>,
+}
+
+pub fn run(command: MotionCommand) -> Result<()> {
+    match command {
+        MotionCommand::Generate(a) => generate_cmd(&a),
+        MotionCommand::Info(a) => info(&a),
+    }
+}
+
+fn parse_kind(s: &str) -> Result<MotionKind, String> {
+    MotionKind::parse(s).ok_or_else(|| {
+        let names: Vec<&str> = MotionKind::ALL.iter().map(|k| k.name()).collect();
+        format!("unknown motion '{s}'; expected one of {}", names.join(", "))
+    })
+}
+
+fn generate_cmd(args: &GenerateArgs) -> Result<()> {
+    // Fail on the output's extension before generating anything.
+    MotionFormat::from_path(&args.out)?;
+    let params = ProceduralParams {
+        kind: args.kind,
+        frames: args.frames,
+        fps: args.fps,
+        seed: args.seed,
+        speed: args.speed,
+        amplitude: args.amplitude,
+    };
+    let motion = generate(&params).with_context(|| format!("generating {}", args.kind))?;
+    let options = MotionFileOptions {
+        npz_up: args.npz_up.into(),
+        ..MotionFileOptions::default()
+    };
+    write_motion(&args.out, &motion, &options)?;
+    let speed = args.speed.unwrap_or(args.kind.default_speed());
+    let speed = if args.kind.is_locomotion() {
+        format!("{speed} m/s")
+    } else {
+        format!("tempo ×{speed}")
+    };
+    emit(&format!(
+        "wrote {}: {}, {} frames at {} fps ({:.3} s), seed {}, {speed}, amplitude {}",
+        args.out.display(),
+        args.kind,
+        motion.frame_count(),
+        motion.fps(),
+        motion.duration(),
+        args.seed,
+        args.amplitude
+    ))
+}
+
+fn info(args: &InfoArgs) -> Result<()> {
+    let format = MotionFormat::from_path(&args.file)?;
+    let mut options = MotionFileOptions {
+        fps_if_missing: args.fps,
+        ..MotionFileOptions::default()
+    };
+    if let Some(up) = args.up {
+        match format {
+            MotionFormat::Npz => options.npz_up = up.into(),
+            MotionFormat::Bvh => options.bvh_up = up.into(),
+        }
+    }
+    if let Some(map) = &args.map {
+        options.bvh_map = match SkeletonPreset::parse(map) {
+            Some(p) => MapChoice::Preset(p),
+            None => MapChoice::Custom(NameMap::read(std::path::Path::new(map))?),
+        };
+    }
+    if let Some(scale) = args.scale {
+        options.bvh_units = BvhUnits::MetresPerUnit(scale);
+    }
+    let (motion, source) = read_motion(&args.file, &options)?;
+    let stats = motion_stats(&motion);
+
+    // Warnings go to stderr, so stdout stays one parseable report.
+    if let MotionSource::Bvh(r) = &source {
+        for w in &r.warnings {
+            eprintln!("warning: {}: {w}", args.file.display());
+        }
+    }
+
+    if args.json {
+        let source_json = match &source {
+            MotionSource::Amass(r) => json!({
+                "format": "npz",
+                "layout": r.layout.name(),
+                "frame_rate_key": r.frame_rate_key,
+                "dropped_joints": r.dropped_joints,
+                "unused_keys": r.unused_keys,
+            }),
+            MotionSource::Bvh(r) => json!({
+                "format": "bvh",
+                "map": r.map,
+                "unit": r.unit,
+                "metres_per_unit": r.metres_per_unit,
+                "rest_extent_m": r.rest_extent,
+                "root_scale": r.root_scale,
+                "unmapped_smpl_joints": r.unmapped,
+                "unused_bvh_joints": r.unused,
+                "warnings": r.warnings,
+            }),
+        };
+        let out = json!({
+            "file": args.file,
+            "frames": stats.frames,
+            "fps": stats.fps,
+            "duration_s": stats.duration,
+            "joint_count": stats.joints.len(),
+            "betas": stats.betas,
+            "root_path_length_m": stats.root_path_length,
+            "root_displacement_m": stats.root_displacement,
+            "joints": stats.joints.iter().map(|j| json!({
+                "name": j.name,
+                "min_deg": j.min_deg,
+                "max_deg": j.max_deg,
+                "max_angle_deg": j.max_angle_deg,
+            })).collect::<Vec<_>>(),
+            "source": source_json,
+        });
+        return emit(&serde_json::to_string_pretty(&out)?);
+    }
+
+    let mut out = String::new();
+    match &source {
+        MotionSource::Amass(r) => writeln!(
+            out,
+            "{}: AMASS-style npz, {} poses, file {} up (read as Y up)",
+            args.file.display(),
+            r.layout.name(),
+            up_name(options.npz_up)
+        )?,
+        MotionSource::Bvh(r) => writeln!(
+            out,
+            "{}: BVH retargeted to SMPL with the {} map, units {} ({} m), skeleton {:.2} m across, root path scaled ×{:.3}",
+            args.file.display(),
+            r.map,
+            r.unit,
+            short(r.metres_per_unit),
+            r.rest_extent,
+            r.root_scale
+        )?,
+    }
+    writeln!(
+        out,
+        "  {} frames at {} fps, {:.3} s",
+        stats.frames, stats.fps, stats.duration
+    )?;
+    writeln!(
+        out,
+        "  {} joints (SMPL order), betas: {}",
+        stats.joints.len(),
+        stats
+            .betas
+            .map_or("none".to_string(), |b| format!("{b} coefficients"))
+    )?;
+    let d = stats.root_displacement;
+    writeln!(
+        out,
+        "  root path {:.3} m, displacement ({:.3}, {:.3}, {:.3}) m",
+        stats.root_path_length, d[0], d[1], d[2]
+    )?;
+    writeln!(
+        out,
+        "  range of motion, degrees (axis-angle components, largest angle):"
+    )?;
+    writeln!(
+        out,
+        "    {:<15} {:>15} {:>15} {:>15} {:>7}",
+        "joint", "x", "y", "z", "angle"
+    )?;
+    for j in &stats.joints {
+        let range = |k: usize| format!("[{:.1}, {:.1}]", j.min_deg[k], j.max_deg[k]);
+        writeln!(
+            out,
+            "    {:<15} {:>15} {:>15} {:>15} {:>7.1}",
+            j.name,
+            range(0),
+            range(1),
+            range(2),
+            j.max_angle_deg
+        )?;
+    }
+    match &source {
+        MotionSource::Amass(r) => {
+            if r.dropped_joints > 0 {
+                writeln!(
+                    out,
+                    "  {} hand/face joints beyond SMPL's body were not used",
+                    r.dropped_joints
+                )?;
+            }
+            if !r.unused_keys.is_empty() {
+                writeln!(out, "  unused keys: {}", r.unused_keys.join(", "))?;
+            }
+        }
+        MotionSource::Bvh(r) => {
+            if !r.unmapped.is_empty() {
+                writeln!(
+                    out,
+                    "  SMPL joints without a BVH joint (kept at rest): {}",
+                    r.unmapped.join(", ")
+                )?;
+            }
+            if !r.unused.is_empty() {
+                writeln!(out, "  BVH joints not used: {}", r.unused.join(", "))?;
+            }
+        }
+    }
+    emit(&out)
+}
+
+/// Up to six decimals, without trailing zeros.
+fn short(x: f64) -> String {
+    let s = format!("{x:.6}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+fn up_name(up: UpAxis) -> &'static str {
+    match up {
+        UpAxis::Y => "Y",
+        UpAxis::Z => "Z",
+    }
+}

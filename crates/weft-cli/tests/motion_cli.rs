@@ -1,0 +1,239 @@
+//! End-to-end tests of `weft motion …` through the real binary.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn weft(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_weft"))
+        .args(args)
+        .output()
+        .expect("the weft binary runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A fresh, empty scratch directory under the target dir, unique per test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("motion-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+#[test]
+fn generate_then_info_in_both_formats() {
+    let dir = scratch("generate");
+    for ext in ["npz", "bvh"] {
+        let out = dir.join(format!("walk.{ext}"));
+        let o = weft(&[
+            "motion",
+            "generate",
+            "--kind",
+            "walk",
+            "--frames",
+            "120",
+            "--fps",
+            "30",
+            "--seed",
+            "0",
+            "--speed",
+            "1.0",
+            "--amplitude",
+            "1.0",
+            "--out",
+            s(&out),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            stdout(&o).contains("walk, 120 frames at 30 fps"),
+            "{}",
+            stdout(&o)
+        );
+        let o = weft(&["motion", "info", s(&out), "--json"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("one JSON object");
+        assert_eq!(v["frames"], 120);
+        assert_eq!(v["fps"], 30.0);
+        assert_eq!(v["joint_count"], 24);
+        let d = v["duration_s"].as_f64().unwrap();
+        assert!((d - 119.0 / 30.0).abs() < 1e-9);
+        // 1 m/s for 3.97 s along +Z, plus a little sway and bob.
+        let z = v["root_displacement_m"][2].as_f64().unwrap();
+        assert!((z - d).abs() < 1e-3, "{z}");
+        let path = v["root_path_length_m"].as_f64().unwrap();
+        assert!(path >= z && path < 1.2 * z, "{path}");
+        let knee = &v["joints"][4];
+        assert_eq!(knee["name"], "left_knee");
+        assert!(knee["max_deg"][0].as_f64().unwrap() > 30.0);
+        assert_eq!(v["source"]["format"], ext);
+
+        let o = weft(&["motion", "info", s(&out)]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = stdout(&o);
+        assert!(text.contains("120 frames at 30 fps, 3.967 s"), "{text}");
+        assert!(text.contains("left_knee"), "{text}");
+    }
+}
+
+#[test]
+fn same_seed_same_bytes() {
+    let dir = scratch("seed");
+    let run = |name: &str, seed: &str| {
+        let out = dir.join(name);
+        let o = weft(&[
+            "motion",
+            "generate",
+            "--kind",
+            "dance",
+            "--frames",
+            "50",
+            "--seed",
+            seed,
+            "--out",
+            s(&out),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read(out).unwrap()
+    };
+    assert_eq!(run("a.npz", "4"), run("b.npz", "4"));
+    assert_ne!(run("a.npz", "4"), run("c.npz", "5"));
+    assert_eq!(run("a.bvh", "4"), run("b.bvh", "4"));
+}
+
+#[test]
+fn bad_arguments_and_files_fail_with_one_line() {
+    let dir = scratch("bad");
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "generate".into(),
+                "--kind".into(),
+                "moonwalk".into(),
+                "--out".into(),
+                "x.npz".into(),
+            ],
+            "unknown motion 'moonwalk'",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "--kind".into(),
+                "walk".into(),
+                "--frames".into(),
+                "99999999999".into(),
+                "--out".into(),
+                s(&dir.join("x.npz")).into(),
+            ],
+            "expected 1 to 10000000",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "--kind".into(),
+                "run".into(),
+                "--speed".into(),
+                "40".into(),
+                "--out".into(),
+                s(&dir.join("x.npz")).into(),
+            ],
+            "speed 40 for run",
+        ),
+        (
+            vec![
+                "generate".into(),
+                "--kind".into(),
+                "walk".into(),
+                "--out".into(),
+                s(&dir.join("x.fbx")).into(),
+            ],
+            "unknown motion format",
+        ),
+        (
+            vec!["info".into(), s(&dir.join("missing.npz")).into()],
+            "missing.npz",
+        ),
+    ];
+    for (args, expected) in cases {
+        let mut all = vec!["motion".to_string()];
+        all.extend(args);
+        let refs: Vec<&str> = all.iter().map(String::as_str).collect();
+        let o = weft(&refs);
+        assert!(!o.status.success(), "{refs:?}");
+        let err = stderr(&o);
+        assert!(err.contains(expected), "{refs:?}: {err}");
+        // One error line (clap adds a hint line after its own argument errors).
+        let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert!(lines[0].starts_with("error: "), "{refs:?}: {err}");
+        assert!(
+            lines.len() == 1 || lines[1].starts_with("For more information"),
+            "{refs:?}: {err}"
+        );
+    }
+    assert!(!dir.join("x.npz").exists());
+
+    // A truncated BVH names the file and line.
+    let bvh = dir.join("t.bvh");
+    std::fs::write(&bvh, "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n").unwrap();
+    let o = weft(&["motion", "info", s(&bvh)]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.starts_with(&format!(
+            "error: {}:6: the file ends here, truncated",
+            s(&bvh)
+        )),
+        "{err}"
+    );
+}
+
+#[test]
+fn bvh_maps_and_scales_from_the_command_line() {
+    let dir = scratch("map");
+    let out = dir.join("bow.bvh");
+    let o = weft(&[
+        "motion",
+        "generate",
+        "--kind",
+        "bow",
+        "--frames",
+        "10",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = weft(&["motion", "info", s(&out), "--map", "smpl", "--scale", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("with the smpl map, units given (1 m)"),
+        "{}",
+        stdout(&o)
+    );
+    // The Mixamo map finds none of SMPL's names.
+    let o = weft(&["motion", "info", s(&out), "--map", "mixamo"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o)
+            .contains("no BVH joint maps to SMPL joint 'pelvis' (the mixamo map looks for Hips)"),
+        "{}",
+        stderr(&o)
+    );
+    let o = weft(&[
+        "motion",
+        "info",
+        s(&out),
+        "--map",
+        s(&dir.join("none.toml")),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("none.toml"), "{}", stderr(&o));
+}
