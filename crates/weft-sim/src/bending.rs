@@ -34,6 +34,7 @@
 //! `θ − θ̄` wrapped into (−π, π] so the energy stays continuous there.
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+use rayon::prelude::*;
 use weft_mesh::{Hinge, Topology, TriMesh};
 
 use crate::energy::{Energy, HessianKind};
@@ -377,16 +378,27 @@ impl Energy for Bending {
     ) -> Result<(), SimError> {
         check_len("positions", self.vertex_count, x.len())?;
         check_len("hessian", self.vertex_count, hess.block_rows())?;
-        for h in &self.hinges {
-            let p = self.local(h, x);
-            let Some(g) = geometry(&p) else { continue };
-            let d = wrapped(g.theta, h.rest_angle);
-            let gt = angle_gradient(&g, &p);
-            let mut m = (gt * gt.transpose() + angle_hessian(&g, &p) * d) * (2.0 * h.coefficient);
-            if kind == HessianKind::Projected {
-                m = project_psd12(&m);
+        // Hinge matrices (and their eigen-projections) in parallel, serial scatter.
+        let blocks: Vec<Option<M12>> = self
+            .hinges
+            .par_iter()
+            .map(|h| {
+                let p = self.local(h, x);
+                let g = geometry(&p)?;
+                let d = wrapped(g.theta, h.rest_angle);
+                let gt = angle_gradient(&g, &p);
+                let m = (gt * gt.transpose() + angle_hessian(&g, &p) * d) * (2.0 * h.coefficient);
+                Some(if kind == HessianKind::Projected {
+                    project_psd12(&m)
+                } else {
+                    m
+                })
+            })
+            .collect();
+        for (h, m) in self.hinges.iter().zip(&blocks) {
+            if let Some(m) = m {
+                hess.add_element(&h.verts, m, scale)?;
             }
-            hess.add_element(&h.verts, &m, scale)?;
         }
         Ok(())
     }

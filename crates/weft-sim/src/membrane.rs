@@ -16,6 +16,7 @@
 //! are all written as a density plus this one code path.
 
 use nalgebra::{Matrix3x2, SMatrix, Vector3};
+use rayon::prelude::*;
 use weft_mesh::TriMesh;
 
 use crate::error::{check_count, check_len, check_vertex, SimError};
@@ -274,7 +275,7 @@ pub(crate) fn membrane_gradient<D: MembraneDensity>(
 }
 
 /// Adds `scale · ∇²E` (exact or per-face projected) into `hess`.
-pub(crate) fn membrane_hessian<D: MembraneDensity>(
+pub(crate) fn membrane_hessian<D: MembraneDensity + Sync>(
     frames: &RestFrames,
     d: &D,
     x: &[[f64; 3]],
@@ -284,13 +285,22 @@ pub(crate) fn membrane_hessian<D: MembraneDensity>(
 ) -> Result<(), SimError> {
     frames.check_positions(x)?;
     check_len("hessian", frames.vertex_count, hess.block_rows())?;
-    for f in 0..frames.faces.len() {
-        let k = d.stiffness(f, &frames.deformation_gradient(f, x));
-        let mut h = frames.element_hessian(f, &k);
-        if kind == HessianKind::Projected {
-            h = project_psd9(&h);
-        }
-        hess.add_element(&frames.faces[f], &h, scale)?;
+    // Element matrices (and their eigen-projections, the bulk of the cost) in
+    // parallel; the scatter stays serial.
+    let blocks: Vec<SMatrix<f64, 9, 9>> = (0..frames.faces.len())
+        .into_par_iter()
+        .map(|f| {
+            let k = d.stiffness(f, &frames.deformation_gradient(f, x));
+            let h = frames.element_hessian(f, &k);
+            if kind == HessianKind::Projected {
+                project_psd9(&h)
+            } else {
+                h
+            }
+        })
+        .collect();
+    for (face, h) in frames.faces.iter().zip(&blocks) {
+        hess.add_element(face, h, scale)?;
     }
     Ok(())
 }

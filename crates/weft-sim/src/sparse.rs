@@ -7,7 +7,8 @@
 //! so that the product `H v` (what conjugate gradients needs) is one pass over the rows,
 //! and the diagonal blocks (a block-Jacobi preconditioner) are one lookup per row.
 
-use nalgebra::{Matrix3, SMatrix};
+use nalgebra::{Matrix3, SMatrix, Vector3};
+use rayon::prelude::*;
 
 use crate::error::{check_len, SimError};
 
@@ -139,17 +140,18 @@ impl BlockCsr {
         let n = self.block_rows();
         check_len("matrix-vector input", n, x.len())?;
         check_len("matrix-vector output", n, y.len())?;
-        for (i, yi) in y.iter_mut().enumerate() {
-            let mut acc = [0.0; 3];
-            for k in self.row_offsets[i]..self.row_offsets[i + 1] {
-                let b = &self.values[k];
-                let xj = x[self.cols[k] as usize];
-                for (r, a) in acc.iter_mut().enumerate() {
-                    *a += b[(r, 0)] * xj[0] + b[(r, 1)] * xj[1] + b[(r, 2)] * xj[2];
+        // Rows are independent: split them over threads in chunks big enough to pay
+        // for the scheduling.
+        y.par_chunks_mut(1024).enumerate().for_each(|(c, ys)| {
+            for (o, yi) in ys.iter_mut().enumerate() {
+                let i = c * 1024 + o;
+                let mut acc = Vector3::zeros();
+                for k in self.row_offsets[i]..self.row_offsets[i + 1] {
+                    acc += self.values[k] * Vector3::from(x[self.cols[k] as usize]);
                 }
+                *yi = [acc.x, acc.y, acc.z];
             }
-            *yi = acc;
-        }
+        });
         Ok(())
     }
 
