@@ -237,3 +237,70 @@ fn bvh_maps_and_scales_from_the_command_line() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("none.toml"), "{}", stderr(&o));
 }
+
+/// A minimal body in the SMPL `.npz` layout: one vertex at each rest joint (of the
+/// built-in skeleton scaled by `scale`), each vertex its own joint's.
+fn tiny_body(path: &Path, scale: f64) {
+    use weft_body::joints::SMPL_PARENTS;
+    use weft_body::motion::DEFAULT_REST_JOINTS;
+    use weft_mesh::io::npz::NpzWriter;
+    let n = 24;
+    let v: Vec<f64> = DEFAULT_REST_JOINTS
+        .iter()
+        .flat_map(|p| p.map(|x| x * scale))
+        .collect();
+    let mut eye = vec![0.0f64; n * n];
+    for i in 0..n {
+        eye[i * n + i] = 1.0;
+    }
+    let mut kintree = Vec::new();
+    kintree.extend(SMPL_PARENTS.iter().map(|p| p.map_or(-1, |p| p as i64)));
+    kintree.extend(0..n as i64);
+    let mut w = NpzWriter::new(false);
+    w.add("v_template", &[n, 3], &v).unwrap();
+    w.add("shapedirs", &[n, 3, 1], &vec![0.0f64; n * 3])
+        .unwrap();
+    w.add("J_regressor", &[n, n], &eye).unwrap();
+    w.add("weights", &[n, n], &eye).unwrap();
+    w.add("kintree_table", &[2, n], &kintree).unwrap();
+    w.add("f", &[2, 3], &[0i64, 1, 2, 0, 2, 3]).unwrap();
+    w.write(path).unwrap();
+}
+
+#[test]
+fn a_body_file_shapes_the_bvh_skeleton() {
+    let dir = scratch("body");
+    let body = dir.join("body.npz");
+    tiny_body(&body, 1.1);
+    let out = dir.join("walk.bvh");
+    let o = weft(&[
+        "motion",
+        "generate",
+        "--kind",
+        "walk",
+        "--frames",
+        "5",
+        "--body",
+        s(&body),
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).unwrap();
+    // left_hip → left_knee is (0.03, −0.39, −0.005) on the built-in skeleton.
+    assert!(text.contains("OFFSET 0.033 -0.429 -0.0055"), "{text}");
+    // Reading it back against the same body gives a root scale of 1.
+    let o = weft(&["motion", "info", s(&out), "--json", "--body", s(&body)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert!((v["source"]["root_scale"].as_f64().unwrap() - 1.0).abs() < 1e-9);
+    let o = weft(&[
+        "motion",
+        "info",
+        s(&out),
+        "--body",
+        s(&dir.join("nobody.npz")),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("nobody.npz"), "{}", stderr(&o));
+}

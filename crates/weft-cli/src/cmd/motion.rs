@@ -5,10 +5,13 @@ use clap::{Args, Subcommand, ValueEnum};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::PathBuf;
+use weft_body::joints::SMPL_JOINT_COUNT;
 use weft_body::motion::{
     generate, motion_stats, read_motion, write_motion, BvhUnits, MapChoice, MotionFileOptions,
     MotionFormat, MotionKind, MotionSource, NameMap, ProceduralParams, SkeletonPreset, UpAxis,
+    DEFAULT_REST_JOINTS,
 };
+use weft_body::BodyModel;
 
 use super::emit;
 
@@ -65,6 +68,49 @@ pub struct GenerateArgs {
     /// Up axis of an .npz output: z as AMASS stores it, or y as weft works.
     #[arg(long, value_enum, default_value_t = Up::Z)]
     npz_up: Up,
+    #[command(flatten)]
+    body: BodyArgs,
+}
+
+/// The body whose rest joints J(β) a motion file is written or read against.
+#[derive(Args)]
+struct BodyArgs {
+    /// A body model in the SMPL .npz layout whose rest joints shape the BVH skeleton,
+    /// the retargeting target and AMASS's Z-up root conversion; default: weft's
+    /// built-in adult rest skeleton.
+    #[arg(long)]
+    body: Option<PathBuf>,
+    /// Shape coefficients β of that body, comma-separated (missing ones are 0).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        requires = "body"
+    )]
+    betas: Vec<f64>,
+}
+
+impl BodyArgs {
+    fn rest_joints(&self) -> Result<[[f64; 3]; SMPL_JOINT_COUNT]> {
+        let Some(path) = &self.body else {
+            return Ok(DEFAULT_REST_JOINTS);
+        };
+        let model = BodyModel::load(path)?;
+        let mut betas = self.betas.clone();
+        if betas.len() < model.num_betas() {
+            betas.resize(model.num_betas(), 0.0);
+        }
+        let joints = model
+            .joints(&betas)
+            .with_context(|| format!("{}: rest joints", path.display()))?;
+        joints.try_into().map_err(|j: Vec<[f64; 3]>| {
+            anyhow::anyhow!(
+                "{}: the body has {} joints; motions drive SMPL's {SMPL_JOINT_COUNT}",
+                path.display(),
+                j.len()
+            )
+        })
+    }
 }
 
 #[derive(Args)]
@@ -88,6 +134,8 @@ pub struct InfoArgs {
     /// Frame rate for an .npz that records none.
     #[arg(long)]
     fps: Option<f64>,
+    #[command(flatten)]
+    body: BodyArgs,
 }
 
 pub fn run(command: MotionCommand) -> Result<()> {
@@ -118,6 +166,7 @@ fn generate_cmd(args: &GenerateArgs) -> Result<()> {
     let motion = generate(&params).with_context(|| format!("generating {}", args.kind))?;
     let options = MotionFileOptions {
         npz_up: args.npz_up.into(),
+        rest_joints: args.body.rest_joints()?,
         ..MotionFileOptions::default()
     };
     write_motion(&args.out, &motion, &options)?;
@@ -143,6 +192,7 @@ fn info(args: &InfoArgs) -> Result<()> {
     let format = MotionFormat::from_path(&args.file)?;
     let mut options = MotionFileOptions {
         fps_if_missing: args.fps,
+        rest_joints: args.body.rest_joints()?,
         ..MotionFileOptions::default()
     };
     if let Some(up) = args.up {
