@@ -1,5 +1,6 @@
 //! Subcommands, one module each.
 
+mod export;
 mod mesh;
 mod motion;
 
@@ -13,12 +14,15 @@ pub enum Command {
     /// Generate procedural motions and inspect motion files (AMASS .npz, BVH).
     #[command(subcommand)]
     Motion(motion::MotionCommand),
+    /// Write a frame sequence as an OBJ sequence, PC2/MDD point cache or glTF binary.
+    Export(export::ExportArgs),
 }
 
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Mesh(c) => mesh::run(c),
         Command::Motion(c) => motion::run(c),
+        Command::Export(a) => export::run(&a),
     }
 }
 

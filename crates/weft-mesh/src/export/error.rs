@@ -12,23 +12,23 @@ use crate::error::MeshError;
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
     /// A file or directory could not be opened or read.
-    #[error("cannot read {}: {source}", .path.display())]
+    #[error("cannot read {}: {error}", .path.display())]
     Read {
         /// The file or directory.
         path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: io::Error,
+        /// The operating system's error. Part of the message, not a `source()`, so a
+        /// report that prints the cause chain does not repeat it.
+        error: io::Error,
     },
     /// An output could not be written. Nothing is left behind: outputs are written to a
     /// temporary name and renamed into place only when complete.
-    #[error("cannot write {}: {source}", .path.display())]
+    #[error("cannot write {}: {error}", .path.display())]
     Write {
         /// The output file or directory.
         path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: io::Error,
+        /// The operating system's error. Part of the message, not a `source()`, so a
+        /// report that prints the cause chain does not repeat it.
+        error: io::Error,
     },
     /// A mesh (a template or an OBJ frame) did not read.
     #[error(transparent)]
@@ -160,18 +160,18 @@ pub enum ExportError {
 
 impl ExportError {
     /// A read error naming `path`.
-    pub(crate) fn read(path: impl Into<PathBuf>, source: io::Error) -> Self {
+    pub(crate) fn read(path: impl Into<PathBuf>, error: io::Error) -> Self {
         ExportError::Read {
             path: path.into(),
-            source,
+            error,
         }
     }
 
     /// A write error naming `path`.
-    pub(crate) fn write(path: impl Into<PathBuf>, source: io::Error) -> Self {
+    pub(crate) fn write(path: impl Into<PathBuf>, error: io::Error) -> Self {
         ExportError::Write {
             path: path.into(),
-            source,
+            error,
         }
     }
 

@@ -750,20 +750,28 @@ impl Reader<'_> {
         };
         let count = self.index(&a["count"], "accessor count")?;
         let view = &self.root["bufferViews"][self.index(&a["bufferView"], "buffer view")?];
-        let start = self.index(&view["byteOffset"], "byteOffset").unwrap_or(0)
-            + a["byteOffset"].as_u64().unwrap_or(0) as usize;
-        let stride = view["byteStride"]
-            .as_u64()
-            .map_or(size * comps, |s| s as usize);
-        let view_end = self.index(&view["byteOffset"], "byteOffset").unwrap_or(0)
-            + self.index(&view["byteLength"], "byteLength")?;
-        let end = if count == 0 {
-            start
-        } else {
-            stride
-                .checked_mul(count - 1)
-                .and_then(|x| x.checked_add(start + size * comps))
-                .ok_or_else(|| self.bad("accessor too large"))?
+        let view_start = self.index(&view["byteOffset"], "byteOffset").unwrap_or(0);
+        let view_end = view_start.checked_add(self.index(&view["byteLength"], "byteLength")?);
+        let start = view_start.checked_add(a["byteOffset"].as_u64().unwrap_or(0) as usize);
+        let element = size * comps;
+        let stride = view["byteStride"].as_u64().map_or(element, |s| s as usize);
+        if stride < element {
+            return Err(self.bad(format!(
+                "byteStride {stride} is smaller than an element ({element} bytes)"
+            )));
+        }
+        let end = start.and_then(|s| {
+            if count == 0 {
+                Some(s)
+            } else {
+                stride
+                    .checked_mul(count - 1)?
+                    .checked_add(s)?
+                    .checked_add(element)
+            }
+        });
+        let (Some(start), Some(end), Some(view_end)) = (start, end, view_end) else {
+            return Err(self.bad("an accessor's byte range overflows"));
         };
         if end > view_end || view_end > self.bin.len() {
             return Err(self.bad("an accessor reaches past its buffer view or the BIN chunk"));
@@ -995,6 +1003,60 @@ mod tests {
                 b[8..12].copy_from_slice(&n.to_le_bytes());
             }
             assert!(parse_glb(&b, p).is_err(), "cut {cut}");
+        }
+    }
+
+    /// A valid file with its JSON changed by `edit`, re-encoded as a `.glb`.
+    fn with_json(good: &[u8], edit: impl FnOnce(&mut Value)) -> Vec<u8> {
+        let len = u32::from_le_bytes([good[12], good[13], good[14], good[15]]) as usize;
+        let mut root: Value = serde_json::from_slice(&good[20..20 + len]).unwrap();
+        edit(&mut root);
+        let mut json = serde_json::to_vec(&root).unwrap();
+        while json.len() % 4 != 0 {
+            json.push(b' ');
+        }
+        let bin = &good[20 + len..];
+        let total = (12 + 8 + json.len() + bin.len()) as u32;
+        let mut out = Vec::new();
+        for x in [GLB_MAGIC, 2, total, json.len() as u32, CHUNK_JSON] {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
+        out.extend_from_slice(&json);
+        out.extend_from_slice(bin);
+        out
+    }
+
+    #[test]
+    fn reader_rejects_hostile_json_without_panicking() {
+        let g = grid(2, 2, 1.0);
+        let f = frames_of(&g, 2);
+        let good = glb_bytes(
+            &[GlbMesh {
+                name: "g",
+                faces: &g.faces,
+                frames: &f,
+                color: BODY_COLOR,
+            }],
+            GlbOptions::default(),
+        )
+        .unwrap();
+        let p = Path::new("h.glb");
+        assert!(parse_glb(&with_json(&good, |_| {}), p).is_ok());
+        type Edit = Box<dyn Fn(&mut Value)>;
+        let edits: Vec<Edit> = vec![
+            Box::new(|r| r["accessors"][0]["count"] = json!(u64::MAX / 2)),
+            Box::new(|r| r["bufferViews"][0]["byteStride"] = json!(0)),
+            Box::new(|r| r["bufferViews"][0]["byteOffset"] = json!(u64::MAX)),
+            Box::new(|r| r["bufferViews"][0]["byteLength"] = json!(u64::MAX)),
+            Box::new(|r| r["accessors"][0]["byteOffset"] = json!(u64::MAX - 3)),
+            Box::new(|r| r["accessors"][0]["bufferView"] = json!(999)),
+            Box::new(|r| r["accessors"][0]["componentType"] = json!(5120)),
+            Box::new(|r| r["meshes"][0]["primitives"][0]["indices"] = json!(0)),
+            Box::new(|r| r["animations"][0]["samplers"][0]["output"] = json!(999)),
+            Box::new(|r| r["scenes"] = json!("x")),
+        ];
+        for (k, edit) in edits.iter().enumerate() {
+            assert!(parse_glb(&with_json(&good, edit), p).is_err(), "edit {k}");
         }
     }
 

@@ -35,22 +35,22 @@ const ALIGN: usize = 64;
 #[derive(Debug, thiserror::Error)]
 pub enum NpyError {
     /// The file could not be opened or read.
-    #[error("cannot read {}: {source}", .path.display())]
+    #[error("cannot read {}: {error}", .path.display())]
     Read {
         /// The file.
         path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: io::Error,
+        /// The operating system's error. Part of the message, not a `source()`, so a
+        /// report that prints the cause chain does not repeat it.
+        error: io::Error,
     },
     /// The file could not be written (nothing is left behind).
-    #[error("cannot write {}: {source}", .path.display())]
+    #[error("cannot write {}: {error}", .path.display())]
     Write {
         /// The file.
         path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: io::Error,
+        /// The operating system's error. Part of the message, not a `source()`, so a
+        /// report that prints the cause chain does not repeat it.
+        error: io::Error,
     },
     /// The file is not a `.npy` array weft reads.
     #[error("{}: {message}", .path.display())]
@@ -181,9 +181,9 @@ pub struct NpyArray {
 
 /// Reads a `.npy` file; see [`parse_npy`].
 pub fn read_npy(path: &Path) -> Result<NpyArray, NpyError> {
-    let bytes = std::fs::read(path).map_err(|source| NpyError::Read {
+    let bytes = std::fs::read(path).map_err(|error| NpyError::Read {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     parse_npy(&bytes, path)
 }
@@ -285,9 +285,9 @@ pub fn write_npy<T: Element>(path: &Path, shape: &[usize], data: &[T]) -> Result
             found: data.len(),
         });
     }
-    write_atomic(path, |w| write_npy_to(w, shape, data)).map_err(|source| NpyError::Write {
+    write_atomic(path, |w| write_npy_to(w, shape, data)).map_err(|error| NpyError::Write {
         path: path.to_path_buf(),
-        source,
+        error,
     })
 }
 

@@ -64,23 +64,62 @@ pub fn write_obj_sequence(
     let temp = TempDir::create(&parent, &name).map_err(|e| ExportError::write(dir, e))?;
 
     let faces_text = faces_text(faces);
-    let total = frames.frame_count();
-    let mut line = String::with_capacity(64 * frames.vertex_count());
-    for (k, positions) in frames.iter().enumerate() {
-        let path = temp.0.join(frame_file_name(k));
-        let written = File::create(&path).and_then(|file| {
-            let mut w = BufWriter::with_capacity(1 << 16, file);
-            write_frame_to(&mut w, positions, &faces_text, k, total, &mut line)?;
-            let file = w.into_inner().map_err(io::IntoInnerError::into_error)?;
-            file.sync_all()
-        });
-        written.map_err(|e| ExportError::write(dir, e))?;
-    }
+    write_frames_parallel(&temp.0, frames, &faces_text).map_err(|e| ExportError::write(dir, e))?;
     sync_dir(&temp.0);
     temp.commit(dir, existing)
         .map_err(|e| ExportError::write(dir, e))?;
     sync_dir(&parent);
     Ok(())
+}
+
+/// How many frame files are formatted, written and synced at once.
+///
+/// Why threads for file output: each file must be synced before the directory is renamed
+/// into place, and a sync waits for a journal commit (about 7 ms on the benchmark
+/// machine), which dominated the export (1 000 frames: 7.8 s sequentially). Concurrent
+/// syncs share commits, and formatting runs on every core meanwhile.
+const WRITER_THREADS: usize = 16;
+
+/// Writes every frame file into `dir` from up to [`WRITER_THREADS`] threads, each taking
+/// the next unwritten frame. The first error stops the others and is returned.
+fn write_frames_parallel(dir: &Path, frames: &Frames, faces_text: &[u8]) -> io::Result<()> {
+    use std::sync::atomic::{AtomicBool, AtomicUsize};
+    use std::sync::Mutex;
+
+    let total = frames.frame_count();
+    let next = AtomicUsize::new(0);
+    let failed = AtomicBool::new(false);
+    let first_error: Mutex<Option<io::Error>> = Mutex::new(None);
+    std::thread::scope(|scope| {
+        for _ in 0..WRITER_THREADS.min(total) {
+            scope.spawn(|| {
+                let mut line = String::with_capacity(64 * frames.vertex_count());
+                while !failed.load(Ordering::Relaxed) {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(positions) = frames.frame(k) else {
+                        break;
+                    };
+                    let path = dir.join(frame_file_name(k));
+                    let written = File::create(&path).and_then(|file| {
+                        let mut w = BufWriter::with_capacity(1 << 16, file);
+                        write_frame_to(&mut w, positions, faces_text, k, total, &mut line)?;
+                        let file = w.into_inner().map_err(io::IntoInnerError::into_error)?;
+                        file.sync_all()
+                    });
+                    if let Err(e) = written {
+                        failed.store(true, Ordering::Relaxed);
+                        let mut slot = first_error.lock().unwrap_or_else(|p| p.into_inner());
+                        slot.get_or_insert(e);
+                        break;
+                    }
+                }
+            });
+        }
+    });
+    match first_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
 }
 
 /// Reads a sequence back: every `.obj` in `dir`, in natural name order (see

@@ -1,0 +1,184 @@
+//! `weft export`: a frame sequence on a template's faces, written as an OBJ sequence, a
+//! PC2 or MDD point cache, or a glTF binary with morph-target animation.
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use weft_mesh::export::gltf::{write_glb, GlbMesh, GlbOptions, BODY_COLOR, GARMENT_COLOR};
+use weft_mesh::export::{
+    validate_fps, write_mdd, write_obj_sequence, write_pc2, ExportFormat, Frames, Pc2Timing,
+};
+use weft_mesh::io::load_mesh;
+use weft_mesh::TriMesh;
+
+use super::emit;
+
+#[derive(Args)]
+pub struct ExportArgs {
+    /// The animation: a directory of OBJ frames (read in name order) or a .npy array of
+    /// shape (frames, vertices, 3), f32 or f64.
+    #[arg(long, value_name = "DIR|FILE.npy")]
+    frames: PathBuf,
+    /// The template mesh (.obj or .ply) whose faces the frames move; its vertex order
+    /// must be the frames' vertex order.
+    #[arg(long, value_name = "G.obj")]
+    faces: PathBuf,
+    /// Output format: obj (a directory of frame_NNNNN.obj), pc2, mdd or glb.
+    #[arg(long, value_name = "obj|pc2|mdd|glb")]
+    format: String,
+    /// Frames per second: the MDD frame times and the glTF key times are k / fps. PC2
+    /// stores no rate (sample k is frame k).
+    #[arg(long, default_value_t = 30.0)]
+    fps: f32,
+    /// Output: a directory for obj (created, or replaced if it holds only an earlier
+    /// sequence), a file otherwise. Written atomically: a failure leaves nothing behind.
+    #[arg(long, value_name = "PATH")]
+    out: PathBuf,
+    /// glb only: a body mesh (.obj or .ply) added as a second mesh, static unless
+    /// --body-frames animates it.
+    #[arg(long, value_name = "B.obj")]
+    body: Option<PathBuf>,
+    /// glb only: the body's frames (DIR or FILE.npy), as many as the garment's.
+    #[arg(long, value_name = "DIR|FILE.npy", requires = "body")]
+    body_frames: Option<PathBuf>,
+    /// glb only: leave out vertex normals (smaller files; viewers shade flat).
+    #[arg(long)]
+    no_normals: bool,
+    /// Print one JSON object describing what was written.
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(args: &ExportArgs) -> Result<()> {
+    let format: ExportFormat = args.format.parse()?;
+    validate_fps(args.fps)?;
+    if format != ExportFormat::Glb && (args.body.is_some() || args.no_normals) {
+        bail!(
+            "--body, --body-frames and --no-normals apply to --format glb only, not {}",
+            format.name()
+        );
+    }
+
+    let template = load_template(&args.faces)?;
+    let frames = load_frames(&args.frames, &template, &args.faces)?;
+    let body = match &args.body {
+        Some(path) => Some(load_body(path, args.body_frames.as_deref())?),
+        None => None,
+    };
+
+    match format {
+        ExportFormat::ObjSequence => write_obj_sequence(&args.out, &template.faces, &frames)?,
+        ExportFormat::Pc2 => write_pc2(&args.out, &frames, Pc2Timing::default())?,
+        ExportFormat::Mdd => write_mdd(&args.out, &frames, args.fps)?,
+        ExportFormat::Glb => {
+            let mut meshes = vec![GlbMesh {
+                name: "garment",
+                faces: &template.faces,
+                frames: &frames,
+                color: GARMENT_COLOR,
+            }];
+            if let Some((mesh, body_frames)) = &body {
+                meshes.push(GlbMesh {
+                    name: "body",
+                    faces: &mesh.faces,
+                    frames: body_frames,
+                    color: BODY_COLOR,
+                });
+            }
+            let options = GlbOptions {
+                fps: args.fps,
+                normals: !args.no_normals,
+            };
+            write_glb(&args.out, &meshes, options)?;
+        }
+    }
+    report(args, format, &frames)
+}
+
+/// The template: OBJ or PLY through the strict readers.
+fn load_template(path: &Path) -> Result<TriMesh> {
+    load_mesh(path).map(|r| r.mesh).map_err(one_line)
+}
+
+/// A library error as its own message only. `MeshError::Io` both prints its OS error
+/// and exposes it as `source()`, so the cause chain `main` prints would say it twice.
+fn one_line(e: impl std::fmt::Display) -> anyhow::Error {
+    anyhow::anyhow!("{e}")
+}
+
+/// The frames at `path`, checked against the template at `template_path`: same vertex
+/// count, every coordinate finite.
+fn load_frames(path: &Path, template: &TriMesh, template_path: &Path) -> Result<Frames> {
+    let frames = Frames::load(path).map_err(one_line)?;
+    if frames.vertex_count() != template.vertex_count() {
+        bail!(
+            "{} has {} vertices per frame but the template {} has {}; the frames must have one position per template vertex, in the template's order",
+            path.display(),
+            frames.vertex_count(),
+            template_path.display(),
+            template.vertex_count()
+        );
+    }
+    frames
+        .check_finite()
+        .with_context(|| path.display().to_string())?;
+    Ok(frames)
+}
+
+/// The body mesh, with its frames or, without them, its own positions as one frame.
+fn load_body(path: &Path, frames: Option<&Path>) -> Result<(TriMesh, Frames)> {
+    let mesh = load_template(path)?;
+    let frames = match frames {
+        Some(f) => load_frames(f, &mesh, path)?,
+        None => {
+            let mut f = Frames::with_vertex_count(mesh.vertex_count())?;
+            f.push_frame_f64(&mesh.positions)?;
+            f.check_finite()
+                .with_context(|| format!("{}: as f32", path.display()))?;
+            f
+        }
+    };
+    Ok((mesh, frames))
+}
+
+fn report(args: &ExportArgs, format: ExportFormat, frames: &Frames) -> Result<()> {
+    let bytes = output_size(&args.out, format)
+        .with_context(|| format!("{}: written, but cannot be measured", args.out.display()))?;
+    if args.json {
+        let out = json!({
+            "format": format.name(),
+            "out": args.out,
+            "frames": frames.frame_count(),
+            "vertices": frames.vertex_count(),
+            "fps": args.fps,
+            "bytes": bytes,
+            "body": args.body,
+        });
+        return emit(&serde_json::to_string_pretty(&out)?);
+    }
+    let what = if format.writes_directory() {
+        format!("{} files", frames.frame_count())
+    } else {
+        "one file".to_owned()
+    };
+    emit(&format!(
+        "wrote {} frames × {} vertices as {format} to {} ({what}, {:.1} MB)",
+        frames.frame_count(),
+        frames.vertex_count(),
+        args.out.display(),
+        bytes as f64 / 1e6
+    ))
+}
+
+/// Bytes written: the file, or the sum over the sequence's files.
+fn output_size(out: &Path, format: ExportFormat) -> std::io::Result<u64> {
+    if !format.writes_directory() {
+        return Ok(std::fs::metadata(out)?.len());
+    }
+    let mut total = 0;
+    for entry in std::fs::read_dir(out)? {
+        total += entry?.metadata()?.len();
+    }
+    Ok(total)
+}
