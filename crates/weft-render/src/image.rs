@@ -45,16 +45,25 @@ impl Image {
     pub fn new(width: u32, height: u32, fill: Rgb) -> Self {
         let width = width.clamp(1, MAX_SIDE);
         let height = height.clamp(1, MAX_SIDE);
-        let n = width as usize * height as usize;
-        let mut data = Vec::with_capacity(n * 3);
-        for _ in 0..n {
-            data.extend_from_slice(&fill);
-        }
+        let data = fill.repeat(width as usize * height as usize);
         Image {
             width,
             height,
             data,
         }
+    }
+
+    /// An image from row-major pixels, top row first; `None` unless there are exactly
+    /// `width × height` of them.
+    pub(crate) fn from_pixels(width: u32, height: u32, pixels: &[Rgb]) -> Option<Self> {
+        if pixels.len() != width as usize * height as usize || width == 0 || height == 0 {
+            return None;
+        }
+        Some(Image {
+            width,
+            height,
+            data: pixels.concat(),
+        })
     }
 
     /// Width in pixels.
@@ -130,16 +139,21 @@ impl Image {
 
     /// Copies `src` with its top-left corner at `(x, y)`, clipped to this image.
     pub fn blit(&mut self, src: &Image, x: i64, y: i64) {
+        // Source columns that land inside this image.
+        let sx0 = (-x).max(0);
+        let sx1 = i64::from(src.width).min(i64::from(self.width) - x);
+        if sx0 >= sx1 {
+            return;
+        }
+        let n = (sx1 - sx0) as usize * 3;
         for sy in 0..i64::from(src.height) {
             let ty = y + sy;
             if ty < 0 || ty >= i64::from(self.height) {
                 continue;
             }
-            for sx in 0..i64::from(src.width) {
-                if let Some(c) = src.get(sx, sy) {
-                    self.set(x + sx, ty, c);
-                }
-            }
+            let s = ((sy * i64::from(src.width) + sx0) * 3) as usize;
+            let t = ((ty * i64::from(self.width) + x + sx0) * 3) as usize;
+            self.data[t..t + n].copy_from_slice(&src.data[s..s + n]);
         }
     }
 
@@ -186,37 +200,6 @@ impl Image {
                 }
             }
         }
-    }
-
-    /// Averages `factor × factor` blocks into one pixel (box filter): how a supersampled
-    /// rendering becomes an anti-aliased one. Sides must be multiples of `factor`.
-    pub(crate) fn downsample(&self, factor: u32) -> Image {
-        if factor <= 1 {
-            return self.clone();
-        }
-        let (w, h) = (self.width / factor, self.height / factor);
-        let mut out = Image::new(w, h, [0; 3]);
-        let n = factor * factor;
-        let sw = self.width as usize;
-        for y in 0..h as usize {
-            for x in 0..w as usize {
-                let mut acc = [0u32; 3];
-                for sy in 0..factor as usize {
-                    let row = (y * factor as usize + sy) * sw;
-                    for sx in 0..factor as usize {
-                        let i = (row + x * factor as usize + sx) * 3;
-                        for (a, &v) in acc.iter_mut().zip(&self.data[i..i + 3]) {
-                            *a += u32::from(v);
-                        }
-                    }
-                }
-                let o = (y * w as usize + x) * 3;
-                for (d, a) in out.data[o..o + 3].iter_mut().zip(acc) {
-                    *d = ((a + n / 2) / n) as u8;
-                }
-            }
-        }
-        out
     }
 
     /// The image as PNG bytes (8-bit RGB, adaptive filtering, balanced compression).
@@ -358,13 +341,19 @@ mod tests {
     }
 
     #[test]
-    fn downsample_averages_blocks() {
-        let mut img = Image::new(4, 2, [0, 0, 0]);
-        img.fill_rect(0, 0, 1, 2, [255, 255, 255]);
-        let d = img.downsample(2);
-        assert_eq!((d.width(), d.height()), (2, 1));
-        assert_eq!(d.get(0, 0), Some([128, 128, 128]));
-        assert_eq!(d.get(1, 0), Some([0, 0, 0]));
+    fn blit_clips_on_every_side() {
+        let mut src = Image::new(3, 2, [9, 9, 9]);
+        src.set(0, 0, [1, 2, 3]);
+        for (x, y) in [(-2, -1), (4, 3), (-5, 0), (0, 9), (1, 1)] {
+            let mut dst = Image::new(5, 4, [0; 3]);
+            dst.blit(&src, x, y);
+            for ty in 0..4i64 {
+                for tx in 0..5i64 {
+                    let expect = src.get(tx - x, ty - y).unwrap_or([0; 3]);
+                    assert_eq!(dst.get(tx, ty), Some(expect), "{x} {y} at {tx} {ty}");
+                }
+            }
+        }
     }
 
     #[test]

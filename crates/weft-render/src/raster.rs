@@ -102,13 +102,37 @@ impl Target {
         }
     }
 
-    /// The colour buffer as an image.
-    pub(crate) fn into_image(self) -> Image {
-        let mut img = Image::new(self.width as u32, self.height as u32, [0; 3]);
-        for (i, c) in self.color.iter().enumerate() {
-            img.set((i % self.width) as i64, (i / self.width) as i64, *c);
+    /// The colour buffer as an image, each `factor × factor` block averaged into one
+    /// pixel (box filter): how a supersampled rendering becomes an anti-aliased one.
+    /// Sides should be multiples of `factor`; a remainder is cut off.
+    pub(crate) fn resolve(self, factor: u32) -> Image {
+        let f = factor.max(1) as usize;
+        let (w, h) = ((self.width / f).max(1), (self.height / f).max(1));
+        if f == 1 {
+            // The buffer always holds width × height pixels.
+            return Image::from_pixels(w as u32, h as u32, &self.color)
+                .unwrap_or_else(|| Image::new(w as u32, h as u32, [0; 3]));
         }
-        img
+        let n = (f * f) as u32;
+        let mut out = Vec::with_capacity(w * h);
+        let mut acc = vec![[0u32; 3]; w];
+        for oy in 0..h {
+            acc.iter_mut().for_each(|a| *a = [0; 3]);
+            for sy in 0..f {
+                let start = (oy * f + sy) * self.width;
+                let row = &self.color[start..start + w * f];
+                for (a, block) in acc.iter_mut().zip(row.chunks_exact(f)) {
+                    for px in block {
+                        a[0] += u32::from(px[0]);
+                        a[1] += u32::from(px[1]);
+                        a[2] += u32::from(px[2]);
+                    }
+                }
+            }
+            out.extend(acc.iter().map(|a| a.map(|v| ((v + n / 2) / n) as u8)));
+        }
+        Image::from_pixels(w as u32, h as u32, &out)
+            .unwrap_or_else(|| Image::new(w as u32, h as u32, [0; 3]))
     }
 }
 
@@ -195,6 +219,19 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn resolve_averages_blocks() {
+        let mut t = Target::new(4, 2, [0; 3]);
+        t.color[0] = [255; 3];
+        t.color[4] = [255; 3];
+        let img = t.resolve(2);
+        assert_eq!((img.width(), img.height()), (2, 1));
+        assert_eq!(img.get(0, 0), Some([128, 128, 128]));
+        assert_eq!(img.get(1, 0), Some([0, 0, 0]));
+        let t = Target::new(3, 2, [7; 3]);
+        assert_eq!(t.resolve(1), Image::new(3, 2, [7; 3]));
     }
 
     #[test]

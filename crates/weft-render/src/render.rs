@@ -266,7 +266,7 @@ pub(crate) fn draw_meshes(
             });
         }
     }
-    target.into_image().downsample(ss)
+    target.resolve(ss)
 }
 
 #[cfg(test)]
