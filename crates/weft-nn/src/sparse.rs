@@ -27,7 +27,7 @@ use crate::adjacency::index_tensor;
 use crate::backend::is_flex;
 use crate::error::{check_shape, NnError, Result, ANY};
 use crate::flex::{contiguous, elements, from_vec};
-use crate::real::{axpy, Real};
+use crate::real::{axpy, simd, Real};
 
 /// Rows per parallel block.
 const BLOCK: usize = 256;
@@ -46,17 +46,22 @@ impl Csr {
         y.par_chunks_mut(BLOCK * width.max(1))
             .enumerate()
             .for_each(|(b, chunk)| {
-                for (r, yi) in chunk.chunks_exact_mut(width.max(1)).enumerate() {
-                    let i = b * BLOCK + r;
-                    for e in self.offsets[i]..self.offsets[i + 1] {
-                        let c = self.columns[e] as usize;
-                        axpy(
-                            T::from_f64(self.values[e]),
-                            &x[c * width..(c + 1) * width],
-                            yi,
-                        );
-                    }
-                }
+                simd(
+                    #[inline(always)]
+                    || {
+                        for (r, yi) in chunk.chunks_exact_mut(width.max(1)).enumerate() {
+                            let i = b * BLOCK + r;
+                            for e in self.offsets[i]..self.offsets[i + 1] {
+                                let c = self.columns[e] as usize;
+                                axpy(
+                                    T::from_f64(self.values[e]),
+                                    &x[c * width..(c + 1) * width],
+                                    yi,
+                                );
+                            }
+                        }
+                    },
+                )
             });
         y
     }

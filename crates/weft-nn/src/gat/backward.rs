@@ -17,10 +17,10 @@ use burn::backend::Flex;
 use rayon::prelude::*;
 
 use super::fused::AnyCache;
-use super::kernel::{block_count, split_blocks, Cache, Dims, BLOCK};
+use super::kernel::{block_count, leaky_slope, split_blocks, Cache, Dims, BLOCK};
 use crate::adjacency::Adjacency;
 use crate::flex::{contiguous, elements, from_vec};
-use crate::real::{axpy, dot, Real};
+use crate::real::{axpy, dot, simd, Real};
 
 /// The autodiff step of the fused operation (parents: `z`, `a_src`, `a_dst`).
 #[derive(Debug)]
@@ -140,46 +140,47 @@ pub(crate) fn backward_kernel<T: Real>(
         .zip(split_blocks(&mut gz, &row_bounds))
         .enumerate()
         .map(|(b, (du_b, gz_b))| {
-            let first = b * BLOCK;
-            let base = offsets[first];
-            let mut g_a = vec![T::ZERO; w];
-            let mut c = vec![T::ZERO; h];
-            let mut ds = vec![T::ZERO; h];
-            for (r, gz_i) in gz_b.chunks_exact_mut(w).enumerate() {
-                let i = first + r;
-                let gi = &grad[i * w..(i + 1) * w];
-                let oi = &out[i * w..(i + 1) * w];
-                let sd = &cache.s_dst[i * h..(i + 1) * h];
-                for k in 0..h {
-                    c[k] = dot(&gi[k * f..(k + 1) * f], &oi[k * f..(k + 1) * f]);
-                }
-                ds.fill(T::ZERO);
-                for e in offsets[i]..offsets[i + 1] {
-                    let j = sources[e] as usize;
-                    let zj = &z[j * w..(j + 1) * w];
-                    let ss = &cache.s_src[j * h..(j + 1) * h];
-                    let al = &cache.alpha[e * h..(e + 1) * h];
-                    let slot = &mut du_b[(e - base) * h..(e - base + 1) * h];
-                    for k in 0..h {
-                        let da = dot(&gi[k * f..(k + 1) * f], &zj[k * f..(k + 1) * f]);
-                        let de = al[k] * (da - c[k]);
-                        let d = if sd[k] + ss[k] > T::ZERO {
-                            de
-                        } else {
-                            de * slope
-                        };
-                        slot[k] = d;
-                        ds[k] += d;
+            simd(
+                #[inline(always)]
+                || {
+                    let first = b * BLOCK;
+                    let base = offsets[first];
+                    let mut g_a = vec![T::ZERO; w];
+                    let mut c = vec![T::ZERO; h];
+                    let mut ds = vec![T::ZERO; h];
+                    for (r, gz_i) in gz_b.chunks_exact_mut(w).enumerate() {
+                        let i = first + r;
+                        let gi = &grad[i * w..(i + 1) * w];
+                        let oi = &out[i * w..(i + 1) * w];
+                        let sd = &cache.s_dst[i * h..(i + 1) * h];
+                        for k in 0..h {
+                            c[k] = dot(&gi[k * f..(k + 1) * f], &oi[k * f..(k + 1) * f]);
+                        }
+                        ds.fill(T::ZERO);
+                        for e in offsets[i]..offsets[i + 1] {
+                            let j = sources[e] as usize;
+                            let zj = &z[j * w..(j + 1) * w];
+                            let ss = &cache.s_src[j * h..(j + 1) * h];
+                            let al = &cache.alpha[e * h..(e + 1) * h];
+                            let slot = &mut du_b[(e - base) * h..(e - base + 1) * h];
+                            for k in 0..h {
+                                let da = dot(&gi[k * f..(k + 1) * f], &zj[k * f..(k + 1) * f]);
+                                let de = al[k] * (da - c[k]);
+                                let d = de * leaky_slope(sd[k] + ss[k], slope);
+                                slot[k] = d;
+                                ds[k] += d;
+                            }
+                        }
+                        let zi = &z[i * w..(i + 1) * w];
+                        for (k, &d) in ds.iter().enumerate() {
+                            let r = k * f..(k + 1) * f;
+                            axpy(d, &a_dst[r.clone()], &mut gz_i[r.clone()]);
+                            axpy(d, &zi[r.clone()], &mut g_a[r]);
+                        }
                     }
-                }
-                let zi = &z[i * w..(i + 1) * w];
-                for (k, &d) in ds.iter().enumerate() {
-                    let r = k * f..(k + 1) * f;
-                    axpy(d, &a_dst[r.clone()], &mut gz_i[r.clone()]);
-                    axpy(d, &zi[r.clone()], &mut g_a[r]);
-                }
-            }
-            g_a
+                    g_a
+                },
+            )
         })
         .collect();
 
@@ -192,32 +193,37 @@ pub(crate) fn backward_kernel<T: Real>(
         .par_chunks_mut(BLOCK * w)
         .enumerate()
         .map(|(b, gz_b)| {
-            let first = b * BLOCK;
-            let mut g_a = vec![T::ZERO; w];
-            let mut dt = vec![T::ZERO; h];
-            for (r, gz_j) in gz_b.chunks_exact_mut(w).enumerate() {
-                let j = first + r;
-                dt.fill(T::ZERO);
-                for &e in &t_entries[t_offsets[j]..t_offsets[j + 1]] {
-                    let e = e as usize;
-                    let i = targets[e] as usize;
-                    let gi = &grad[i * w..(i + 1) * w];
-                    let al = &cache.alpha[e * h..(e + 1) * h];
-                    let d = &du[e * h..(e + 1) * h];
-                    for k in 0..h {
-                        let r = k * f..(k + 1) * f;
-                        axpy(al[k], &gi[r.clone()], &mut gz_j[r]);
-                        dt[k] += d[k];
+            simd(
+                #[inline(always)]
+                || {
+                    let first = b * BLOCK;
+                    let mut g_a = vec![T::ZERO; w];
+                    let mut dt = vec![T::ZERO; h];
+                    for (r, gz_j) in gz_b.chunks_exact_mut(w).enumerate() {
+                        let j = first + r;
+                        dt.fill(T::ZERO);
+                        for &e in &t_entries[t_offsets[j]..t_offsets[j + 1]] {
+                            let e = e as usize;
+                            let i = targets[e] as usize;
+                            let gi = &grad[i * w..(i + 1) * w];
+                            let al = &cache.alpha[e * h..(e + 1) * h];
+                            let d = &du[e * h..(e + 1) * h];
+                            for k in 0..h {
+                                let r = k * f..(k + 1) * f;
+                                axpy(al[k], &gi[r.clone()], &mut gz_j[r]);
+                                dt[k] += d[k];
+                            }
+                        }
+                        let zj = &z[j * w..(j + 1) * w];
+                        for (k, &d) in dt.iter().enumerate() {
+                            let r = k * f..(k + 1) * f;
+                            axpy(d, &a_src[r.clone()], &mut gz_j[r.clone()]);
+                            axpy(d, &zj[r.clone()], &mut g_a[r]);
+                        }
                     }
-                }
-                let zj = &z[j * w..(j + 1) * w];
-                for (k, &d) in dt.iter().enumerate() {
-                    let r = k * f..(k + 1) * f;
-                    axpy(d, &a_src[r.clone()], &mut gz_j[r.clone()]);
-                    axpy(d, &zj[r.clone()], &mut g_a[r]);
-                }
-            }
-            g_a
+                    g_a
+                },
+            )
         })
         .collect();
 

@@ -24,7 +24,7 @@
 use rayon::prelude::*;
 
 use crate::adjacency::Adjacency;
-use crate::real::{axpy, dot, Real};
+use crate::real::{axpy, dot, simd, Real};
 
 /// Rows per parallel block.
 pub(crate) const BLOCK: usize = 64;
@@ -55,13 +55,19 @@ pub(crate) struct Cache<T> {
     pub s_src: Vec<T>,
 }
 
-#[inline]
-fn leaky<T: Real>(u: T, slope: T) -> T {
-    if u > T::ZERO {
-        u
-    } else {
-        u * slope
-    }
+/// LeakyReLU without a data-dependent branch (the sign of a logit is a coin flip, so a
+/// branch mispredicts half the time).
+#[inline(always)]
+pub(crate) fn leaky<T: Real>(u: T, slope: T) -> T {
+    u * leaky_slope(u, slope)
+}
+
+/// The derivative of LeakyReLU at `u`: 1 above zero, `slope` below.
+#[inline(always)]
+pub(crate) fn leaky_slope<T: Real>(u: T, slope: T) -> T {
+    // Exactly 1 or exactly `slope`: `p·1 + (1 − p)·slope` with `p ∈ {0, 1}`.
+    let positive = T::from_bool(u > T::ZERO);
+    positive + (T::ONE - positive) * slope
 }
 
 /// Splits `data` (rows of `row_len` over `n` rows) into the mutable slices of the row
@@ -88,13 +94,18 @@ fn scores<T: Real>(z: &[T], a: &[T], n: usize, dims: Dims) -> Vec<T> {
     s.par_chunks_mut(BLOCK * h)
         .enumerate()
         .for_each(|(b, chunk)| {
-            for (r, row) in chunk.chunks_exact_mut(h).enumerate() {
-                let i = b * BLOCK + r;
-                let zi = &z[i * w..(i + 1) * w];
-                for (k, o) in row.iter_mut().enumerate() {
-                    *o = dot(&zi[k * f..(k + 1) * f], &a[k * f..(k + 1) * f]);
-                }
-            }
+            simd(
+                #[inline(always)]
+                || {
+                    for (r, row) in chunk.chunks_exact_mut(h).enumerate() {
+                        let i = b * BLOCK + r;
+                        let zi = &z[i * w..(i + 1) * w];
+                        for (k, o) in row.iter_mut().enumerate() {
+                            *o = dot(&zi[k * f..(k + 1) * f], &a[k * f..(k + 1) * f]);
+                        }
+                    }
+                },
+            )
         });
     s
 }
@@ -128,54 +139,59 @@ pub(crate) fn forward<T: Real>(
         .zip(alpha_blocks)
         .enumerate()
         .for_each(|(b, (out_b, alpha_b))| {
-            let first = b * BLOCK;
-            let base = offsets[first];
-            let mut max = vec![T::NEG_INFINITY; h];
-            let mut sum = vec![T::ZERO; h];
-            for (r, out_i) in out_b.chunks_exact_mut(w).enumerate() {
-                let i = first + r;
-                let (lo, hi) = (offsets[i], offsets[i + 1]);
-                let sd = &s_dst[i * h..(i + 1) * h];
-                max.fill(T::NEG_INFINITY);
-                // Logits into the α slots, then the per-destination max.
-                for e in lo..hi {
-                    let j = sources[e] as usize;
-                    let ss = &s_src[j * h..(j + 1) * h];
-                    let slot = &mut alpha_b[(e - base) * h..(e - base + 1) * h];
-                    for k in 0..h {
-                        let l = leaky(sd[k] + ss[k], slope);
-                        slot[k] = l;
-                        if l > max[k] {
-                            max[k] = l;
+            simd(
+                #[inline(always)]
+                || {
+                    let first = b * BLOCK;
+                    let base = offsets[first];
+                    let mut max = vec![T::NEG_INFINITY; h];
+                    let mut sum = vec![T::ZERO; h];
+                    for (r, out_i) in out_b.chunks_exact_mut(w).enumerate() {
+                        let i = first + r;
+                        let (lo, hi) = (offsets[i], offsets[i + 1]);
+                        let sd = &s_dst[i * h..(i + 1) * h];
+                        max.fill(T::NEG_INFINITY);
+                        // Logits into the α slots, then the per-destination max.
+                        for e in lo..hi {
+                            let j = sources[e] as usize;
+                            let ss = &s_src[j * h..(j + 1) * h];
+                            let slot = &mut alpha_b[(e - base) * h..(e - base + 1) * h];
+                            for k in 0..h {
+                                let l = leaky(sd[k] + ss[k], slope);
+                                slot[k] = l;
+                                if l > max[k] {
+                                    max[k] = l;
+                                }
+                            }
+                        }
+                        sum.fill(T::ZERO);
+                        for e in lo..hi {
+                            let slot = &mut alpha_b[(e - base) * h..(e - base + 1) * h];
+                            for k in 0..h {
+                                let x = (slot[k] - max[k]).exp();
+                                slot[k] = x;
+                                sum[k] += x;
+                            }
+                        }
+                        for s in sum.iter_mut() {
+                            *s = T::ONE / *s;
+                        }
+                        for e in lo..hi {
+                            let j = sources[e] as usize;
+                            let zj = &z[j * w..(j + 1) * w];
+                            let slot = &mut alpha_b[(e - base) * h..(e - base + 1) * h];
+                            for k in 0..h {
+                                slot[k] = slot[k] * sum[k];
+                                axpy(
+                                    slot[k],
+                                    &zj[k * f..(k + 1) * f],
+                                    &mut out_i[k * f..(k + 1) * f],
+                                );
+                            }
                         }
                     }
-                }
-                sum.fill(T::ZERO);
-                for e in lo..hi {
-                    let slot = &mut alpha_b[(e - base) * h..(e - base + 1) * h];
-                    for k in 0..h {
-                        let x = (slot[k] - max[k]).exp();
-                        slot[k] = x;
-                        sum[k] += x;
-                    }
-                }
-                for s in sum.iter_mut() {
-                    *s = T::ONE / *s;
-                }
-                for e in lo..hi {
-                    let j = sources[e] as usize;
-                    let zj = &z[j * w..(j + 1) * w];
-                    let slot = &mut alpha_b[(e - base) * h..(e - base + 1) * h];
-                    for k in 0..h {
-                        slot[k] = slot[k] * sum[k];
-                        axpy(
-                            slot[k],
-                            &zj[k * f..(k + 1) * f],
-                            &mut out_i[k * f..(k + 1) * f],
-                        );
-                    }
-                }
-            }
+                },
+            )
         });
     (
         out,

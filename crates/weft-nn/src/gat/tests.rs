@@ -191,3 +191,17 @@ fn gat_block_heads_streams_and_paths_agree() {
         .init(&device)
         .is_err());
 }
+
+#[test]
+fn seeded_initialisation_is_deterministic() {
+    let weights = |seed| {
+        let device = crate::backend::seeded(&cpu(), seed);
+        let block = GatBlockConfig::new(5, 4)
+            .with_heads(2)
+            .init(&device)
+            .unwrap();
+        (host(&block.weight.val()), host(&block.att_src.val()))
+    };
+    assert_eq!(weights(42), weights(42));
+    assert_ne!(weights(42), weights(43));
+}
