@@ -161,7 +161,7 @@ fn walk_joint_ranges_look_like_walking() {
     // Knee: nearly straight in stance, about 60° in swing.
     let (lo, hi) = range(4, 0);
     assert!(
-        (3.0..12.0).contains(&lo) && (50.0..75.0).contains(&hi),
+        (3.0..12.0).contains(&lo) && (55.0..72.0).contains(&hi),
         "knee {lo} {hi}"
     );
     // Ankle: some dorsi- and plantar flexion.

@@ -393,11 +393,22 @@ fn frame_at(kind: MotionKind, t: f64, speed: f64, amplitude: f64, var: &Variatio
             for left in [true, false] {
                 let p = if left { phi } else { phi + PI };
                 let (s, c) = p.sin_cos();
-                let (knee_peak, knee_base) = if run { (95.0, 15.0) } else { (55.0, 5.0) };
-                let hip = (if run { 0.6 } else { 0.4 }) * natural * scale + natural * scale * s;
-                let knee = knee_base
-                    + var.knee
-                    + knee_peak * scale * ((1.0 + (p + 0.25).cos()) / 2.0).powi(2);
+                // Phase p: heel strike at π/2, toe-off near −π/2. The hip leads by
+                // 0.5 rad, as in measured gait (it extends most before toe-off and
+                // flexes most before heel strike), so the thigh is already forward
+                // when the knee bends most in swing.
+                let hip = (if run { 0.6 } else { 0.4 }) * natural * scale
+                    + natural * scale * (p + 0.5).sin();
+                let swing_bump = (1.0 + (p + 0.13).cos()) / 2.0;
+                let knee = if run {
+                    15.0 + var.knee + 95.0 * scale * swing_bump.powi(2)
+                } else {
+                    // Swing flexion (about 60°) and the small loading-response bend
+                    // after heel strike.
+                    5.0 + var.knee
+                        + 50.0 * scale * swing_bump.powi(3)
+                        + 10.0 * scale * ((1.0 + (p - 2.3).cos()) / 2.0).powi(4)
+                };
                 let ankle = if run {
                     (10.0 - 10.0 * s - 15.0 * c) * scale
                 } else {
