@@ -15,6 +15,7 @@ pub mod error;
 pub mod fit;
 pub mod kind;
 pub mod obj;
+pub mod onbody;
 mod pants;
 pub mod rng;
 pub mod skirt;
@@ -24,6 +25,7 @@ mod tube;
 pub use error::GarmentError;
 pub use fit::{Measurements, TorsoSection};
 pub use kind::{DressTop, GarmentKind, Style};
+pub use onbody::FitBody;
 pub use skirt::SkirtLength;
 
 use weft_mesh::TriMesh;

@@ -1,0 +1,88 @@
+//! Generation on an actual body model: measure it, build the garment, move it into the
+//! body's frame and push any vertex closer than a margin out of the body.
+//!
+//! Tubes of ellipses follow the body's cross sections only approximately: the shoulder
+//! blades and the inner thighs bulge past an ellipse or a strap's arc. The push-out moves
+//! just those vertices (by at most a few centimetres) to the body's closest surface point
+//! plus the margin along the outward direction, the same step a drape's first frame
+//! performs, so the template starts collision-free for the simulator.
+
+use weft_body::query::BodySurface;
+use weft_body::BodyModel;
+use weft_mesh::TriMesh;
+
+use crate::build::{add, norm, scale, sub};
+use crate::{generate, Garment, GarmentError, GarmentKind, Measurements, Style};
+
+/// Distance kept between a pushed-out vertex and the body (m).
+pub const PUSH_OUT_MARGIN: f64 = 0.004;
+
+/// The rest-pose body a garment is fitted to: its measurements, mesh and query surface.
+pub struct FitBody {
+    /// Measurements (pelvis-relative).
+    pub measurements: Measurements,
+    /// The body mesh at β, in the model's own frame.
+    pub mesh: TriMesh,
+    /// Closest-point / signed-distance queries on `mesh`.
+    pub surface: BodySurface,
+    /// The pelvis joint: garments are built around the origin and moved here.
+    pub origin: [f64; 3],
+}
+
+impl FitBody {
+    /// Measures `model` at shape `betas`.
+    pub fn new(model: &BodyModel, betas: &[f64]) -> Result<Self, GarmentError> {
+        let measurements = Measurements::from_body(model, betas)?;
+        let mesh = model.shape(betas)?;
+        let origin = model.joints(betas)?.first().copied().unwrap_or([0.0; 3]);
+        let surface = BodySurface::from_mesh(&mesh)
+            .map_err(|e| GarmentError::Measurements(format!("body surface: {e}")))?;
+        Ok(FitBody {
+            measurements,
+            mesh,
+            surface,
+            origin,
+        })
+    }
+
+    /// Builds `kind` on this body with about `vertices` vertices.
+    pub fn generate(
+        &self,
+        kind: GarmentKind,
+        style: &Style,
+        vertices: usize,
+    ) -> Result<Garment, GarmentError> {
+        let mut g = generate(kind, style, &self.measurements, vertices)?;
+        for p in &mut g.mesh.positions {
+            *p = add(*p, self.origin);
+        }
+        self.push_out(&mut g.mesh.positions, PUSH_OUT_MARGIN)?;
+        Ok(g)
+    }
+
+    /// Moves every point closer to the body than `margin` (or inside it) to the closest
+    /// surface point plus `margin` outwards. Four passes: a moved point can land near
+    /// another part of the body (armpit, crotch).
+    pub fn push_out(&self, points: &mut [[f64; 3]], margin: f64) -> Result<(), GarmentError> {
+        for _ in 0..4 {
+            let closest = self
+                .surface
+                .closest_points(points)
+                .map_err(|e| GarmentError::Measurements(format!("closest points: {e}")))?;
+            for (p, c) in points.iter_mut().zip(&closest) {
+                if c.signed_distance >= margin {
+                    continue;
+                }
+                let offset = sub(*p, c.point);
+                let d = norm(offset);
+                let out = if d > 1e-9 {
+                    scale(offset, c.signed_distance.signum() / d)
+                } else {
+                    self.surface.face_normals()[c.triangle as usize]
+                };
+                *p = add(c.point, scale(out, margin));
+            }
+        }
+        Ok(())
+    }
+}
