@@ -6,15 +6,18 @@
 //! A geometry crate: no learning dependency, so it builds and tests in seconds.
 
 pub mod features;
+pub mod default_body;
 pub mod error;
 pub mod joints;
 pub mod kinematics;
 pub mod model;
 pub mod motion;
+pub mod mpfb;
 pub mod query;
 pub mod rotation;
 pub mod skinning;
 
+pub use default_body::default_body;
 pub use error::BodyError;
 pub use model::{BodyModel, BodyParts, ShapedBody};
 pub use skinning::Skinning;

@@ -1,5 +1,6 @@
 //! Subcommands, one module each.
 
+mod body;
 mod export;
 mod mesh;
 mod motion;
@@ -11,6 +12,9 @@ pub enum Command {
     /// Inspect meshes and build their multilevel graph hierarchies.
     #[command(subcommand)]
     Mesh(mesh::MeshCommand),
+    /// The SMPL-format body: inspect, shape, pose, and import the default body.
+    #[command(subcommand)]
+    Body(body::BodyCommand),
     /// Generate procedural motions and inspect motion files (AMASS .npz, BVH).
     #[command(subcommand)]
     Motion(motion::MotionCommand),
@@ -21,6 +25,7 @@ pub enum Command {
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Mesh(c) => mesh::run(c),
+        Command::Body(c) => body::run(c),
         Command::Motion(c) => motion::run(c),
         Command::Export(a) => export::run(&a),
     }
