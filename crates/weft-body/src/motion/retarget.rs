@@ -43,7 +43,7 @@ use super::error::MotionError;
 use super::names::{NameMap, SkeletonPreset};
 use super::rest::{check_rest_joints, DEFAULT_REST_JOINTS};
 use super::rot::{axis_angle, shortest_arc};
-use super::types::{Motion, Pose};
+use super::types::{Motion, Pose, MAX_FRAMES};
 use crate::joints::{SMPL_JOINT_COUNT, SMPL_JOINT_NAMES, SMPL_PARENTS};
 
 /// Which axis points up in a source file. weft's frame is Y up; a Z-up file is turned
@@ -217,6 +217,12 @@ pub fn retarget_bvh(
     check_rest_joints(&options.rest_joints).map_err(MotionError::Parameter)?;
     if bvh.frame_count() == 0 {
         return Err(fail("the file has no frames ('Frames: 0')".into()));
+    }
+    if bvh.frame_count() > MAX_FRAMES {
+        return Err(fail(format!(
+            "{} frames; at most {MAX_FRAMES} fit in memory as SMPL poses",
+            bvh.frame_count()
+        )));
     }
     let map = match &options.map {
         MapChoice::Auto => best_preset(bvh),
@@ -476,6 +482,14 @@ mod tests {
         assert_eq!(detect_units(1690.0).0, "mm");
         assert_eq!(detect_units(67.0).0, "in");
         assert_eq!(detect_units(30.5).0, "CMU");
+    }
+
+    #[test]
+    fn a_file_without_frames_is_an_error() {
+        let joints = crate::motion::smpl_bvh::smpl_bvh_skeleton(&DEFAULT_REST_JOINTS);
+        let bvh = Bvh::new(joints, 0.1, vec![]).unwrap();
+        let e = retarget_bvh(&bvh, Path::new("e.bvh"), &RetargetOptions::default()).unwrap_err();
+        assert_eq!(e.to_string(), "e.bvh: the file has no frames ('Frames: 0')");
     }
 
     #[test]
