@@ -36,11 +36,12 @@ pub enum GarmentError {
     #[error(transparent)]
     Body(#[from] weft_body::BodyError),
     /// Writing the garment failed.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {path}")]
     Io {
         /// The destination.
         path: String,
         /// The cause.
+        #[source]
         source: std::io::Error,
     },
 }

@@ -1,18 +1,11 @@
-//! Fitting to a real body: weft's default body (assets/body/weft_body.npz) when it is in
-//! the checkout. No garment vertex may be inside the rest body.
-
-use std::path::PathBuf;
+//! Fitting to a real body: weft's default body. No garment vertex may be inside the rest
+//! body.
 
 use weft_body::BodyModel;
 use weft_garment::{DressTop, FitBody, GarmentKind, Style};
 
 fn default_body() -> Option<BodyModel> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../assets/body/weft_body.npz");
-    if !path.exists() {
-        eprintln!("skipped: {} not present", path.display());
-        return None;
-    }
-    Some(BodyModel::load(&path).expect("default body loads"))
+    Some(weft_body::default_body().expect("default body loads"))
 }
 
 #[test]

@@ -2,6 +2,7 @@
 
 mod body;
 mod export;
+mod garment;
 mod mesh;
 mod motion;
 
@@ -18,6 +19,10 @@ pub enum Command {
     /// Generate procedural motions and inspect motion files (AMASS .npz, BVH).
     #[command(subcommand)]
     Motion(motion::MotionCommand),
+    /// Procedural garment templates (skirts, dresses, tops, shorts, pants, jumpsuits)
+    /// fitted to a body.
+    #[command(subcommand)]
+    Garment(garment::GarmentCommand),
     /// Write a frame sequence as an OBJ sequence, PC2/MDD point cache or glTF binary.
     Export(export::ExportArgs),
 }
@@ -28,6 +33,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Body(c) => body::run(c),
         Command::Motion(c) => motion::run(c),
         Command::Export(a) => export::run(&a),
+        Command::Garment(c) => garment::run(c),
     }
 }
 
