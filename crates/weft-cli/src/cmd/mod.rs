@@ -5,6 +5,7 @@ mod export;
 mod garment;
 mod mesh;
 mod motion;
+mod render;
 
 use clap::Subcommand;
 
@@ -19,6 +20,9 @@ pub enum Command {
     /// Generate procedural motions and inspect motion files (AMASS .npz, BVH).
     #[command(subcommand)]
     Motion(motion::MotionCommand),
+    /// Draw a mesh or a directory of frames to PNG, optionally over a body and coloured
+    /// by one value per vertex.
+    Render(render::RenderArgs),
     /// Procedural garment templates (skirts, dresses, tops, shorts, pants, jumpsuits)
     /// fitted to a body.
     #[command(subcommand)]
@@ -32,6 +36,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Mesh(c) => mesh::run(c),
         Command::Body(c) => body::run(c),
         Command::Motion(c) => motion::run(c),
+        Command::Render(a) => render::run(&a),
         Command::Export(a) => export::run(&a),
         Command::Garment(c) => garment::run(c),
     }

@@ -1,0 +1,598 @@
+//! `weft render`: a mesh, or a directory of frames, to a PNG picture, optionally over a
+//! body and coloured by one value per vertex from a `.npy` file.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use weft_mesh::io::load_mesh;
+use weft_mesh::TriMesh;
+use weft_render::{
+    render, render_frames, render_sequence, render_turntable, write_apng, Colormap, MeshStats,
+    Paint, RenderOptions, Rendered, ScalarPaint, ScalarRange, SceneMesh, Shading, View, BODY_COLOR,
+    GARMENT_COLOR,
+};
+
+use super::emit;
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// An .obj or .ply mesh, or a directory of .obj/.ply frames (drawn as a contact sheet
+    /// in natural file-name order, or as an animation with --animate).
+    input: PathBuf,
+    /// A body mesh drawn under the garment in a neutral grey.
+    #[arg(long, value_name = "FILE")]
+    body: Option<PathBuf>,
+    /// A .npy array of f32 or f64 values, one per garment vertex: shape (N,), or for a
+    /// directory of frames (N,) for every frame or (frames, N) one row per frame.
+    /// Non-finite values are drawn magenta and reported.
+    #[arg(long = "color-by", value_name = "FILE.npy")]
+    color_by: Option<PathBuf>,
+    /// Camera preset; all meshes are framed automatically.
+    #[arg(long, value_enum, default_value_t = CameraArg::ThreeQuarter)]
+    camera: CameraArg,
+    /// Number of views of --camera turntable.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=36))]
+    views: u32,
+    /// Picture side in pixels; a contact sheet or turntable is about this wide.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(64..=8192))]
+    size: u32,
+    /// Colour map of --color-by: viridis for magnitudes, diverging (blue-white-red,
+    /// white at 0) for signed values.
+    #[arg(long, value_enum, default_value_t = ColormapArg::Viridis)]
+    colormap: ColormapArg,
+    /// Fixed colour range MIN:MAX (e.g. 0:20, or --range=-5:5); default: the data's range
+    /// (symmetric around 0 for the diverging map).
+    #[arg(long, value_name = "MIN:MAX", value_parser = parse_range, allow_hyphen_values = true)]
+    range: Option<(f64, f64)>,
+    /// Legend title, e.g. "vertex error (mm)"; default: the .npy file's stem.
+    #[arg(long)]
+    label: Option<String>,
+    /// Flat shading shows the facets; smooth interpolates normals.
+    #[arg(long, value_enum, default_value_t = ShadingArg::Smooth)]
+    shading: ShadingArg,
+    /// A title drawn at the top left.
+    #[arg(long)]
+    title: Option<String>,
+    /// For a directory of frames: write an animated PNG (APNG) instead of a sheet.
+    #[arg(long)]
+    animate: bool,
+    /// Frames per second of --animate.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u16).range(1..=120))]
+    fps: u16,
+    /// The output .png file (written atomically: never a partial file).
+    #[arg(long, value_name = "PNG")]
+    out: PathBuf,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum CameraArg {
+    Front,
+    Side,
+    ThreeQuarter,
+    Turntable,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ColormapArg {
+    Viridis,
+    Diverging,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ShadingArg {
+    Flat,
+    Smooth,
+}
+
+fn parse_range(s: &str) -> Result<(f64, f64), String> {
+    let err = || {
+        format!("`{s}` is not a range; expected MIN:MAX with finite numbers, MIN < MAX (e.g. 0:20)")
+    };
+    let (a, b) = s.split_once(':').ok_or_else(err)?;
+    let (a, b): (f64, f64) = (
+        a.trim().parse().map_err(|_| err())?,
+        b.trim().parse().map_err(|_| err())?,
+    );
+    if !(a.is_finite() && b.is_finite() && a < b) {
+        return Err(err());
+    }
+    Ok((a, b))
+}
+
+/// The per-vertex values of --color-by: one row for all frames, or one per frame.
+struct Values {
+    path: PathBuf,
+    rows: Vec<Vec<f64>>,
+}
+
+impl Values {
+    fn row(&self, frame: usize) -> &[f64] {
+        &self.rows[if self.rows.len() == 1 { 0 } else { frame }]
+    }
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let ext = args
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if ext.as_deref() != Some("png") {
+        bail!(
+            "{}: the output must be a .png file (weft render writes PNG{})",
+            args.out.display(),
+            if args.animate {
+                ", animated as APNG"
+            } else {
+                ""
+            }
+        );
+    }
+    let is_dir = args.input.is_dir();
+    if is_dir && matches!(args.camera, CameraArg::Turntable) {
+        bail!(
+            "{}: --camera turntable draws one mesh from all sides; for a directory of frames pick front, side or three-quarter",
+            args.input.display()
+        );
+    }
+    if args.animate && !is_dir {
+        bail!(
+            "{}: --animate needs a directory of frames",
+            args.input.display()
+        );
+    }
+    let frame_paths = if is_dir {
+        frame_files(&args.input)?
+    } else {
+        vec![args.input.clone()]
+    };
+    let mut frames = Vec::with_capacity(frame_paths.len());
+    for p in &frame_paths {
+        frames.push(load_mesh(p)?.mesh);
+    }
+    let body = match &args.body {
+        Some(p) => Some(load_mesh(p)?.mesh),
+        None => None,
+    };
+    let values = match &args.color_by {
+        Some(p) => Some(read_values(p, &frame_paths, &frames)?),
+        None => None,
+    };
+    let label = args.label.clone().unwrap_or_else(|| {
+        args.color_by
+            .as_deref()
+            .and_then(Path::file_stem)
+            .map_or_else(String::new, |s| s.to_string_lossy().into_owned())
+    });
+    let colormap = match args.colormap {
+        ColormapArg::Viridis => Colormap::Viridis,
+        ColormapArg::Diverging => Colormap::Diverging,
+    };
+    let range = match args.range {
+        Some((a, b)) => ScalarRange::fixed(a, b)?,
+        None => ScalarRange::Auto,
+    };
+    let shading = match args.shading {
+        ShadingArg::Flat => Shading::Flat,
+        ShadingArg::Smooth => Shading::Smooth,
+    };
+    let names: Vec<String> = frame_paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
+    let scenes: Vec<Vec<SceneMesh<'_>>> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let paint = match &values {
+                Some(v) => Paint::Scalars(ScalarPaint {
+                    values: v.row(i),
+                    colormap,
+                    range,
+                    label: &label,
+                }),
+                None => Paint::Solid(GARMENT_COLOR),
+            };
+            let mut scene = Vec::with_capacity(2);
+            if let Some(b) = &body {
+                scene.push(
+                    SceneMesh::new("--body", b, Paint::Solid(BODY_COLOR)).with_shading(shading),
+                );
+            }
+            scene.push(SceneMesh::new(names[i].clone(), m, paint).with_shading(shading));
+            scene
+        })
+        .collect();
+    let view = match args.camera {
+        CameraArg::Front => View::Front,
+        CameraArg::Side => View::Side,
+        CameraArg::ThreeQuarter | CameraArg::Turntable => View::ThreeQuarter,
+    };
+    let opts = |w: u32, h: u32| RenderOptions {
+        view,
+        title: args.title.clone(),
+        ..RenderOptions::new(w, h)
+    };
+    let labels: Vec<String> = frame_paths
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let stem = p
+                .file_stem()
+                .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+            format!("{i}: {stem}")
+        })
+        .collect();
+    let (width, height, stats) = if args.animate {
+        let r = render_frames(&scenes, &labels, &opts(args.size, args.size))?;
+        write_apng(&args.out, &r.frames, args.fps)
+            .context("cannot write the animation (nothing was written)")?;
+        (args.size, args.size, r.meshes)
+    } else {
+        let r: Rendered = if is_dir {
+            let cols = (frames.len() as f64).sqrt().ceil().max(1.0) as u32;
+            let tile = (args.size / cols).max(96);
+            render_sequence(&scenes, &labels, &opts(tile, tile), Some(cols))?
+        } else if matches!(args.camera, CameraArg::Turntable) {
+            let cols = args.views.min(4);
+            let tile = (args.size / cols).max(96);
+            render_turntable(&scenes[0], args.views, &opts(tile, tile), Some(cols))?
+        } else {
+            render(&scenes[0], &opts(args.size, args.size))?
+        };
+        r.image
+            .write_png(&args.out)
+            .context("cannot write the picture (nothing was written)")?;
+        (r.image.width(), r.image.height(), r.meshes)
+    };
+    warn_nonfinite(&stats, values.as_ref(), frames.len());
+    let mut out = String::new();
+    write!(out, "wrote {} ({width}×{height}", args.out.display())?;
+    if args.animate {
+        write!(out, ", {} frames at {} fps", frames.len(), args.fps)?;
+    }
+    write!(out, "): ")?;
+    if is_dir {
+        write!(out, "{} frames from {}", frames.len(), args.input.display())?;
+    } else {
+        write!(
+            out,
+            "{} ({} vertices)",
+            args.input.display(),
+            frames[0].vertex_count()
+        )?;
+    }
+    if let Some(b) = &args.body {
+        write!(out, " over {}", b.display())?;
+    }
+    if let Some(v) = &values {
+        let all = v.rows.iter().flatten().copied();
+        let (lo, hi) = range.resolve(all, colormap);
+        write!(
+            out,
+            ", coloured by {} ({}, {} to {})",
+            v.path.display(),
+            colormap.name(),
+            short(lo),
+            short(hi)
+        )?;
+    }
+    emit(&out)
+}
+
+/// `v` with at most 4 decimals and no trailing zeros: 7.989999771 -> 7.99.
+fn short(v: f64) -> String {
+    let s = format!("{v:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
+    }
+}
+
+/// The .obj/.ply files of `dir`, in natural order (frame_2 before frame_10).
+fn frame_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let entries = std::fs::read_dir(dir)
+        .with_context(|| format!("{}: cannot list the directory", dir.display()))?;
+    let mut files = Vec::new();
+    for e in entries {
+        let e = e.with_context(|| format!("{}: cannot list the directory", dir.display()))?;
+        let p = e.path();
+        let ext = p
+            .extension()
+            .and_then(|x| x.to_str())
+            .map(str::to_ascii_lowercase);
+        if matches!(ext.as_deref(), Some("obj" | "ply")) && p.is_file() {
+            files.push(p);
+        }
+    }
+    if files.is_empty() {
+        bail!(
+            "{}: no .obj or .ply files in the directory; expected one mesh file per frame",
+            dir.display()
+        );
+    }
+    files.sort_by_key(|p| natural_key(p));
+    Ok(files)
+}
+
+/// Sort key that orders digit runs by value: `f2` < `f10`.
+fn natural_key(p: &Path) -> Vec<(u8, String)> {
+    let name = p
+        .file_name()
+        .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+    let mut key = Vec::new();
+    let mut chars = name.chars().peekable();
+    while let Some(&c) = chars.peek() {
+        let digit = c.is_ascii_digit();
+        let mut run = String::new();
+        while let Some(&d) = chars.peek() {
+            if d.is_ascii_digit() != digit {
+                break;
+            }
+            run.push(d);
+            chars.next();
+        }
+        if digit {
+            let trimmed = run.trim_start_matches('0');
+            // Longer numbers are larger; equal lengths compare as text.
+            // Ties (f01, f1) fall back to the digits as written.
+            key.push((1, format!("{trimmed:0>40}/{run}")));
+        } else {
+            key.push((0, run));
+        }
+    }
+    key
+}
+
+/// Reads --color-by and checks its shape against the frames.
+fn read_values(path: &Path, frame_paths: &[PathBuf], frames: &[TriMesh]) -> Result<Values> {
+    let (shape, data) = npy::read(path)?;
+    let first = &frame_paths[0];
+    let n = frames[0].vertex_count();
+    let rows: Vec<Vec<f64>> = match shape.as_slice() {
+        [_] => vec![data],
+        [f, len] if frames.len() > 1 => {
+            if *f != frames.len() {
+                bail!(
+                    "{}: {f} rows of values for {} frames in {}; expected shape ({}, {n}) or ({n},)",
+                    path.display(),
+                    frames.len(),
+                    first.parent().map_or_else(String::new, |d| d.display().to_string()),
+                    frames.len()
+                );
+            }
+            data.chunks(*len.max(&1)).map(<[f64]>::to_vec).collect()
+        }
+        s => bail!(
+            "{}: an array of shape {s:?}; expected one value per vertex, shape ({n},){}",
+            path.display(),
+            if frames.len() > 1 {
+                format!(" or ({}, {n})", frames.len())
+            } else {
+                String::new()
+            }
+        ),
+    };
+    for (i, (m, p)) in frames.iter().zip(frame_paths).enumerate() {
+        let row = &rows[if rows.len() == 1 { 0 } else { i }];
+        if row.len() != m.vertex_count() {
+            bail!(
+                "{} holds {} values per row, but {} has {} vertices; expected one value per vertex",
+                path.display(),
+                row.len(),
+                p.display(),
+                m.vertex_count()
+            );
+        }
+    }
+    Ok(Values {
+        path: path.to_path_buf(),
+        rows,
+    })
+}
+
+/// Warnings on stderr for data drawn in the error colour.
+fn warn_nonfinite(stats: &[MeshStats], values: Option<&Values>, frames: usize) {
+    for s in stats {
+        if s.nonfinite_scalars > 0 {
+            let from = values.map_or_else(String::new, |v| format!(" of {}", v.path.display()));
+            let scope = if frames > 1 {
+                " (summed over frames)"
+            } else {
+                ""
+            };
+            eprintln!(
+                "warning: {}: {} values{from} are not finite (NaN or infinite){scope}; drawn in magenta",
+                s.name, s.nonfinite_scalars
+            );
+        }
+        if s.nonfinite_positions > 0 {
+            eprintln!(
+                "warning: {}: {} vertex positions are not finite; their faces are drawn in magenta",
+                s.name, s.nonfinite_positions
+            );
+        }
+        if s.skipped_faces > 0 {
+            eprintln!(
+                "warning: {}: {} faces have no finite corner position and were not drawn",
+                s.name, s.skipped_faces
+            );
+        }
+    }
+}
+
+/// A minimal private reader of 1-D and 2-D little-endian f32/f64 `.npy` arrays.
+///
+/// weft-mesh is getting a full `.npy` reader (`weft_mesh::export::npy`); this one exists
+/// so `weft render` does not wait for it, and should be replaced by it once it lands.
+mod npy {
+    use anyhow::{bail, Context, Result};
+    use std::path::Path;
+
+    /// Shape and values (as f64) of the array in `path`.
+    pub(super) fn read(path: &Path) -> Result<(Vec<usize>, Vec<f64>)> {
+        let bytes =
+            std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+        parse(&bytes).with_context(|| format!("{}: not a usable .npy array", path.display()))
+    }
+
+    pub(super) fn parse(bytes: &[u8]) -> Result<(Vec<usize>, Vec<f64>)> {
+        if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
+            bail!("no .npy magic string at the start");
+        }
+        let (header_len, start) = match bytes[6] {
+            1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
+            2 | 3 if bytes.len() >= 12 => {
+                let n = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+                (usize::try_from(n)?, 12)
+            }
+            v => bail!("unsupported .npy version {v}; expected 1, 2 or 3"),
+        };
+        let header = bytes
+            .get(start..start + header_len)
+            .context("the header is cut short")?;
+        let header = std::str::from_utf8(header).context("the header is not text")?;
+        let descr = field(header, "descr").context("the header has no 'descr'")?;
+        let width = match descr.trim_matches(|c| c == '\'' || c == '"') {
+            "<f4" => 4,
+            "<f8" => 8,
+            other => bail!(
+                "element type {other}; expected little-endian float32 or float64 ('<f4' or '<f8')"
+            ),
+        };
+        let fortran =
+            field(header, "fortran_order").context("the header has no 'fortran_order'")?;
+        if fortran.trim() != "False" {
+            bail!("Fortran-ordered data; expected C order");
+        }
+        let shape_text = field(header, "shape").context("the header has no 'shape'")?;
+        let shape = shape_text
+            .trim()
+            .trim_start_matches('(')
+            .trim_end_matches(')')
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(|s| {
+                s.parse::<usize>()
+                    .with_context(|| format!("shape entry `{s}` is not a size"))
+            })
+            .collect::<Result<Vec<usize>>>()?;
+        let count = shape
+            .iter()
+            .try_fold(1usize, |a, &b| a.checked_mul(b))
+            .context("the shape is too large")?;
+        let data = &bytes[start + header_len..];
+        if Some(data.len()) != count.checked_mul(width) {
+            bail!(
+                "{} data bytes for shape {shape:?} of {width}-byte floats; expected {}",
+                data.len(),
+                count.saturating_mul(width)
+            );
+        }
+        let values = if width == 4 {
+            data.chunks_exact(4)
+                .map(|c| f64::from(f32::from_le_bytes([c[0], c[1], c[2], c[3]])))
+                .collect()
+        } else {
+            data.chunks_exact(8)
+                .map(|c| f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]))
+                .collect()
+        };
+        Ok((shape, values))
+    }
+
+    /// The text of `key`'s value in the header dict, up to the next top-level comma.
+    fn field<'a>(header: &'a str, key: &str) -> Option<&'a str> {
+        let at = header
+            .find(&format!("'{key}'"))
+            .or_else(|| header.find(&format!("\"{key}\"")))?;
+        let rest = &header[at + key.len() + 2..];
+        let rest = rest.trim_start().strip_prefix(':')?.trim_start();
+        let mut depth = 0;
+        for (i, c) in rest.char_indices() {
+            match c {
+                '(' => depth += 1,
+                ')' => depth -= 1,
+                ',' | '}' if depth == 0 => return Some(&rest[..i]),
+                _ => {}
+            }
+        }
+        None
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+
+        fn npy(descr: &str, shape: &str, data: &[u8]) -> Vec<u8> {
+            let mut h =
+                format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+            while (10 + h.len() + 1) % 64 != 0 {
+                h.push(' ');
+            }
+            h.push('\n');
+            let mut b = b"\x93NUMPY\x01\x00".to_vec();
+            b.extend_from_slice(&(h.len() as u16).to_le_bytes());
+            b.extend_from_slice(h.as_bytes());
+            b.extend_from_slice(data);
+            b
+        }
+
+        #[test]
+        fn reads_f4_and_f8_in_one_and_two_dimensions() {
+            let d: Vec<u8> = [1.5f32, -2.0, f32::NAN]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect();
+            let (s, v) = parse(&npy("<f4", "(3,)", &d)).unwrap();
+            assert_eq!(s, vec![3]);
+            assert_eq!(&v[..2], &[1.5, -2.0]);
+            assert!(v[2].is_nan());
+            let d: Vec<u8> = [1.0f64, 2.0, 3.0, 4.0]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect();
+            let (s, v) = parse(&npy("<f8", "(2, 2)", &d)).unwrap();
+            assert_eq!((s, v), (vec![2, 2], vec![1.0, 2.0, 3.0, 4.0]));
+        }
+
+        #[test]
+        fn rejects_what_it_cannot_read() {
+            assert!(parse(b"not an npy").is_err());
+            let e = parse(&npy("<i4", "(1,)", &[0; 4])).unwrap_err();
+            assert!(format!("{e:#}").contains("'<f4' or '<f8'"), "{e:#}");
+            let e = parse(&npy("<f4", "(3,)", &[0; 8])).unwrap_err();
+            assert!(format!("{e:#}").contains("8 data bytes"), "{e:#}");
+            assert!(parse(&npy(">f4", "(1,)", &[0; 4])).is_err());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn natural_order_of_frame_files() {
+        let mut v: Vec<PathBuf> = ["f10.obj", "f2.obj", "f1.obj", "f01.obj", "a.obj"]
+            .iter()
+            .map(PathBuf::from)
+            .collect();
+        v.sort_by_key(|p| natural_key(p));
+        let names: Vec<_> = v.iter().map(|p| p.display().to_string()).collect();
+        assert_eq!(names, ["a.obj", "f01.obj", "f1.obj", "f2.obj", "f10.obj"]);
+    }
+
+    #[test]
+    fn ranges_parse() {
+        assert_eq!(parse_range("0:20"), Ok((0.0, 20.0)));
+        assert_eq!(parse_range("-5.5 : 5"), Ok((-5.5, 5.0)));
+        assert!(parse_range("5:5").is_err());
+        assert!(parse_range("x:1").is_err());
+        assert!(parse_range("1").is_err());
+    }
+}
