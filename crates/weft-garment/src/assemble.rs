@@ -45,16 +45,7 @@ pub fn assemble(kind: GarmentKind, style: &Style, m: &Measurements, h: f64) -> B
     let waistband = m.waist_y - 0.04;
     match kind {
         GarmentKind::Skirt => {
-            let s = skirt_sections(
-                m,
-                waistband,
-                style.length.hem_y(m),
-                style.flare,
-                e,
-                style.wave,
-                style.lobes,
-                h,
-            );
+            let s = skirt_sections(m, waistband, style.length.hem_y(m), style, h);
             let n = ring_count(&s, h);
             vertical_tube(&mut b, &s, n);
         }
@@ -64,16 +55,7 @@ pub fn assemble(kind: GarmentKind, style: &Style, m: &Measurements, h: f64) -> B
             } else {
                 style.length
             };
-            let mut s = skirt_sections(
-                m,
-                m.waist_y,
-                length.hem_y(m),
-                style.flare,
-                e,
-                style.wave,
-                style.lobes,
-                h,
-            );
+            let mut s = skirt_sections(m, m.waist_y, length.hem_y(m), style, h);
             s.pop();
             let bodice_top = if style.dress_top == DressTop::Strapless {
                 top_y - 0.02

@@ -2,6 +2,7 @@
 //! to the hem, never closer to the body than the ease.
 
 use crate::fit::Measurements;
+use crate::kind::Style;
 use crate::tube::{segments, Section};
 
 /// Skirt length: where the hem sits.
@@ -42,19 +43,17 @@ pub fn body_envelope(m: &Measurements, y: f64) -> ([f64; 2], f64) {
     }
 }
 
-/// Sections from `hem_y` up to `top_y` (ascending). Below `hip_y` the skirt widens by
-/// `flare` (0 straight, 1 a wide A-line: 0.6 m of extra radius per metre of length);
+/// Sections from `hem_y` up to `top_y` (ascending) with the style's ease. Below the hips
+/// the skirt widens by the style's `flare` (0 straight, 1 a wide A-line: 0.6 m of extra radius per metre of length);
 /// waviness grows towards the hem.
 pub fn skirt_sections(
     m: &Measurements,
     top_y: f64,
     hem_y: f64,
-    flare: f64,
-    ease: f64,
-    wave: f64,
-    lobes: f64,
+    style: &Style,
     h: f64,
 ) -> Vec<Section> {
+    let (flare, ease, wave, lobes) = (style.flare, style.ease, style.wave, style.lobes);
     let count = segments(top_y - hem_y, h).max(2);
     let hip_y = m.crotch_y + 0.35 * (m.waist_y - m.crotch_y);
     // Largest envelope between the waist and the hips sets where the flare starts from.
