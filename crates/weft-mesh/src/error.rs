@@ -6,8 +6,9 @@ use std::path::PathBuf;
 /// What went wrong reading, validating or writing a mesh.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
-    /// The file could not be opened, read or written.
-    #[error("{path}: {source}")]
+    /// The file could not be opened, read or written. The operating system's reason is
+    /// the error's `source()`, so a cause-chain printer shows it once.
+    #[error("{path}: cannot access the file")]
     Io {
         /// The file.
         path: PathBuf,

@@ -98,19 +98,13 @@ pub fn run(args: &ExportArgs) -> Result<()> {
 
 /// The template: OBJ or PLY through the strict readers.
 fn load_template(path: &Path) -> Result<TriMesh> {
-    load_mesh(path).map(|r| r.mesh).map_err(one_line)
-}
-
-/// A library error as its own message only. `MeshError::Io` both prints its OS error
-/// and exposes it as `source()`, so the cause chain `main` prints would say it twice.
-fn one_line(e: impl std::fmt::Display) -> anyhow::Error {
-    anyhow::anyhow!("{e}")
+    Ok(load_mesh(path)?.mesh)
 }
 
 /// The frames at `path`, checked against the template at `template_path`: same vertex
 /// count, every coordinate finite.
 fn load_frames(path: &Path, template: &TriMesh, template_path: &Path) -> Result<Frames> {
-    let frames = Frames::load(path).map_err(one_line)?;
+    let frames = Frames::load(path)?;
     if frames.vertex_count() != template.vertex_count() {
         bail!(
             "{} has {} vertices per frame but the template {} has {}; the frames must have one position per template vertex, in the template's order",
