@@ -116,6 +116,32 @@ fn renders_a_garment_over_a_body_coloured_by_values() {
 }
 
 #[test]
+fn the_default_body_is_built_in() {
+    let dir = scratch("render_default_body");
+    let (g, _) = meshes(&dir);
+    let out = dir.join("out.png");
+    let o = weft(&[
+        "render",
+        s(&g),
+        "--body",
+        "default",
+        "--camera",
+        "front",
+        "--size",
+        "128",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("over the default body"),
+        "{}",
+        stdout(&o)
+    );
+    assert_eq!(png_size(&out), (128, 128));
+}
+
+#[test]
 fn a_count_mismatch_names_both_files_and_writes_nothing() {
     let dir = scratch("render_mismatch");
     let (g, _) = meshes(&dir);

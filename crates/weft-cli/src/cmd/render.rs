@@ -20,8 +20,9 @@ pub struct RenderArgs {
     /// An .obj or .ply mesh, or a directory of .obj/.ply frames (drawn as a contact sheet
     /// in natural file-name order, or as an animation with --animate).
     input: PathBuf,
-    /// A body mesh drawn under the garment in a neutral grey.
-    #[arg(long, value_name = "FILE")]
+    /// A body drawn under the garment in a neutral grey: an .obj/.ply mesh, or `default`
+    /// for weft's default body in its rest shape and pose.
+    #[arg(long, value_name = "FILE|default")]
     body: Option<PathBuf>,
     /// A .npy array of f32 or f64 values, one per garment vertex: shape (N,), or for a
     /// directory of frames (N,) for every frame or (frames, N) one row per frame.
@@ -152,6 +153,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         frames.push(load_mesh(p)?.mesh);
     }
     let body = match &args.body {
+        Some(p) if p.as_os_str() == "default" => Some(
+            weft_body::default_body()
+                .and_then(|m| m.shape(&[]))
+                .context("loading the default body")?,
+        ),
         Some(p) => Some(load_mesh(p)?.mesh),
         None => None,
     };
@@ -263,8 +269,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             frames[0].vertex_count()
         )?;
     }
-    if let Some(b) = &args.body {
-        write!(out, " over {}", b.display())?;
+    match &args.body {
+        Some(b) if b.as_os_str() == "default" => write!(out, " over the default body")?,
+        Some(b) => write!(out, " over {}", b.display())?,
+        None => {}
     }
     if let Some(v) = &values {
         let all = v.rows.iter().flatten().copied();
