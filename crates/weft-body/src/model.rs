@@ -254,9 +254,10 @@ impl BodyModel {
         let v = vt.shape[0];
         let sd = npz.floats("shapedirs", &[Some(v), Some(3), None])?;
         let b = sd.shape[2];
-        let w = npz.floats("weights", &[Some(v), None])?;
-        let j = w.shape[1];
-        let kt = npz.ints("kintree_table", &[Some(2), Some(j)])?;
+        // The skeleton defines J; the other arrays are checked against it.
+        let kt = npz.ints("kintree_table", &[Some(2), None])?;
+        let j = kt.shape[1];
+        let w = npz.floats("weights", &[Some(v), Some(j)])?;
         let jr = npz.floats("J_regressor", &[Some(j), Some(v)]).map_err(|e| match e {
             NpzError::Invalid { ref message, .. } if message.contains("'|O'") => invalid(
                 "J_regressor",
@@ -989,6 +990,23 @@ pub(crate) mod tests {
             let m2 = BodyModel::from_npz_bytes(w.to_bytes().unwrap(), "smpl.npz").unwrap();
             assert_eq!(m2.skeleton().parents(), &[None, Some(0), Some(1)]);
         }
+        // Arrays are checked against J from the kintree.
+        let mut w = NpzWriter::new(false);
+        let parts = m.to_parts();
+        let v = m.vertex_count();
+        let vt: Vec<f64> = parts.v_template.iter().flatten().copied().collect();
+        w.add("v_template", &[v, 3], &vt).unwrap();
+        w.add("shapedirs", &[v, 3, 2], &parts.shapedirs).unwrap();
+        w.add("kintree_table", &[2, 3], &[-1i64, 0, 1, 0, 1, 2])
+            .unwrap();
+        w.add("weights", &[v, 2], &vec![0.5f64; v * 2]).unwrap();
+        let e = BodyModel::from_npz_bytes(w.to_bytes().unwrap(), "w.npz")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            format!("w.npz: `weights` has shape ({v}, 2); expected ({v}, 3)")
+        );
         // A missing key and a wrong shape name the key and the expectation.
         let mut w = NpzWriter::new(false);
         w.add("v_template", &[2, 3], &[0.0f64; 6]).unwrap();

@@ -157,9 +157,17 @@ pub fn skin_with(
             }
         }
         Skinning::Dqs => {
-            let dq: Vec<DualQuat> = transforms
+            // Flat [w, x, y, z | w, x, y, z] per joint: the per-vertex loop below is
+            // the hot path and stays on plain arrays.
+            let dq: Vec<[f64; 8]> = transforms
                 .iter()
-                .map(|a| DualQuat::from_rigid(&a.rotation, &a.translation))
+                .map(|a| {
+                    let q = DualQuat::from_rigid(&a.rotation, &a.translation);
+                    [
+                        q.real.w, q.real.i, q.real.j, q.real.k, q.dual.w, q.dual.i, q.dual.j,
+                        q.dual.k,
+                    ]
+                })
                 .collect();
             for (v, &p) in rest.iter().enumerate() {
                 out(v, dqs_vertex(&dq, weights, v, p));
@@ -168,33 +176,51 @@ pub fn skin_with(
     }
 }
 
-/// Dual quaternion skinning of one vertex.
-fn dqs_vertex(dq: &[DualQuat], weights: &SkinWeights, v: usize, p: [f64; 3]) -> [f64; 3] {
-    // The dominant joint fixes the hemisphere.
-    let pivot = weights
-        .influences(v)
-        .fold((0usize, f64::NEG_INFINITY), |best, (j, w)| {
-            if w > best.1 {
-                (j, w)
-            } else {
-                best
-            }
-        })
-        .0;
-    let q0 = dq[pivot].real;
-    let mut b = DualQuat {
-        real: nalgebra::Quaternion::new(0.0, 0.0, 0.0, 0.0),
-        dual: nalgebra::Quaternion::new(0.0, 0.0, 0.0, 0.0),
-    };
+/// Dual quaternion skinning of one vertex (Kavan et al. 2007, Alg. 1): blend the
+/// joints' dual quaternions, each flipped into the hemisphere of the dominant joint's,
+/// divide by the norm of the real part, and apply
+/// `p' = p + 2 r⃗ × (r⃗ × p + r₀ p) + 2 (r₀ d⃗ − d₀ r⃗ + r⃗ × d⃗)`.
+/// The translation term ignores any part of `d` along `r` (it is scalar in `d r*`), so
+/// no re-orthogonalisation is needed.
+fn dqs_vertex(dq: &[[f64; 8]], weights: &SkinWeights, v: usize, p: [f64; 3]) -> [f64; 3] {
+    let mut pivot = 0;
+    let mut best = f64::NEG_INFINITY;
     for (j, w) in weights.influences(v) {
-        let s = if q0.dot(&dq[j].real) < 0.0 { -w } else { w };
-        b = b.add(&dq[j].scale(s));
+        if w > best {
+            best = w;
+            pivot = j;
+        }
     }
-    match b.to_rigid() {
-        Some((r, t)) => (r * Vector3::from(p) + t).into(),
+    let q0 = &dq[pivot];
+    let mut b = [0.0f64; 8];
+    for (j, w) in weights.influences(v) {
+        let q = &dq[j];
+        let dot = q0[0] * q[0] + q0[1] * q[1] + q0[2] * q[2] + q0[3] * q[3];
+        let s = if dot < 0.0 { -w } else { w };
+        for k in 0..8 {
+            b[k] += s * q[k];
+        }
+    }
+    let n = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2] + b[3] * b[3]).sqrt();
+    if n.is_nan() || n <= 1e-12 {
         // Only for a vertex without (positive) weights: leave it where it is.
-        None => p,
+        return p;
     }
+    let inv = 1.0 / n;
+    let (r0, r) = (b[0] * inv, [b[1] * inv, b[2] * inv, b[3] * inv]);
+    let (d0, d) = (b[4] * inv, [b[5] * inv, b[6] * inv, b[7] * inv]);
+    let cross = |a: [f64; 3], c: [f64; 3]| {
+        [
+            a[1] * c[2] - a[2] * c[1],
+            a[2] * c[0] - a[0] * c[2],
+            a[0] * c[1] - a[1] * c[0],
+        ]
+    };
+    let rp = cross(r, p);
+    let inner = [rp[0] + r0 * p[0], rp[1] + r0 * p[1], rp[2] + r0 * p[2]];
+    let rot = cross(r, inner);
+    let rd = cross(r, d);
+    [0, 1, 2].map(|k| p[k] + 2.0 * rot[k] + 2.0 * (r0 * d[k] - d0 * r[k] + rd[k]))
 }
 
 /// Skins `rest` into new `f64` positions; see [`skin_with`].

@@ -3,7 +3,9 @@
 //! Forward (inference device) and forward + backward (autodiff device, gradients of the
 //! input, W and both attention vectors), fused CPU kernel against the generic burn path.
 //!
-//! `cargo bench -p weft-nn --bench gat`
+//! `cargo bench -p weft-nn --bench gat` — with `backend::retain_freed_memory()` as a
+//! training binary would call it; set `WEFT_MALLOC_DEFAULTS=1` to measure with glibc's
+//! default trimming instead.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use weft_mesh::primitives::builtin_garment;
@@ -20,6 +22,9 @@ fn layer(device: &Device, implementation: AttentionImpl) -> GatBlock {
 }
 
 fn bench(c: &mut Criterion) {
+    if std::env::var_os("WEFT_MALLOC_DEFAULTS").is_none() {
+        weft_nn::backend::retain_freed_memory();
+    }
     let batch = GraphBatch::single(&builtin_garment().graph());
     let adjacency = batch.adjacency().clone();
     let n = batch.node_count();

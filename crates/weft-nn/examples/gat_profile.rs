@@ -22,6 +22,9 @@ fn main() {
         std::process::exit(2);
     };
     let iters: usize = iters;
+    if std::env::var_os("WEFT_MALLOC_DEFAULTS").is_none() {
+        weft_nn::backend::retain_freed_memory();
+    }
     let batch = GraphBatch::single(&builtin_garment().graph());
     let adjacency = batch.adjacency().clone();
     let n = batch.node_count();
