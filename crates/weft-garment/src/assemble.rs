@@ -92,7 +92,7 @@ pub fn assemble(kind: GarmentKind, style: &Style, m: &Measurements, h: f64) -> B
                 };
                 let holes = shoulders(&mut b, m, top, style_of, e, h);
                 let end = match kind {
-                    GarmentKind::TShirt => Some(m.shoulder_x + 0.45 * (m.elbow_x - m.shoulder_x)),
+                    GarmentKind::TShirt => Some(m.shoulder_x + 0.55 * (m.elbow_x - m.shoulder_x)),
                     GarmentKind::LongSleeve => Some(m.wrist_x - 0.03),
                     _ => None,
                 };
@@ -115,7 +115,7 @@ pub fn assemble(kind: GarmentKind, style: &Style, m: &Measurements, h: f64) -> B
             let end_y = if kind == GarmentKind::Shorts {
                 m.crotch_y - 0.35 * (m.crotch_y - m.knee_y)
             } else {
-                m.ankle_y + 0.04
+                m.ankle_y + 0.08
             };
             if let Some(bottom) = rings.first() {
                 legs(&mut b, m, bottom, end_y, e, h);

@@ -135,11 +135,14 @@ impl Measurements {
 
     /// Leg radius at height `y` (thigh at the crotch, tapering to knee and ankle).
     pub fn leg_r_at(&self, y: f64) -> f64 {
+        // The calf is as wide as the knee down to 60% of the shin.
+        let calf = self.knee_y - 0.6 * (self.knee_y - self.ankle_y);
         piecewise(
             y,
             &[
                 (self.crotch_y, self.leg_r[0]),
                 (self.knee_y, self.leg_r[1]),
+                (calf, self.leg_r[1]),
                 (self.ankle_y, self.leg_r[2]),
             ],
         )
@@ -185,12 +188,17 @@ impl Measurements {
         let crotch_y = hip[1] - 0.6 * (hip[1] - knee[1]).abs() * 0.25;
         let armpit_y = shoulder[1] - 0.11 * (shoulder[1] - hip[1]).abs() / 0.55;
         let mut torso = Vec::new();
-        let steps = 8;
+        let steps = 24;
         for s in 0..=steps {
             let y = crotch_y - 0.03 + (armpit_y - crotch_y + 0.03) * s as f64 / steps as f64;
             let slab: Vec<&[f64; 3]> = verts
                 .iter()
-                .filter(|p| (p[1] - y).abs() < 0.01 && p[0].abs() < 0.85 * shoulder_x.max(0.1))
+                .filter(|p| {
+                    // Arms only reach down to the armpit in T-pose; hips are wider than
+                    // the shoulders' 85%, so the lateral cut applies near the armpit only.
+                    (p[1] - y).abs() < 0.01
+                        && (y < armpit_y - 0.06 || p[0].abs() < 0.85 * shoulder_x.max(0.1))
+                })
                 .collect();
             if slab.len() < 4 {
                 continue;

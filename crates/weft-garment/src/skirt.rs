@@ -56,28 +56,29 @@ pub fn skirt_sections(
     let (flare, ease, wave, lobes) = (style.flare, style.ease, style.wave, style.lobes);
     let count = segments(top_y - hem_y, h).max(2);
     let hip_y = m.crotch_y + 0.35 * (m.waist_y - m.crotch_y);
-    // Largest envelope between the waist and the hips sets where the flare starts from.
-    let mut rest = [0.0f64; 2];
-    let mut y = hip_y;
-    while y <= top_y {
-        let (r, _) = body_envelope(m, y);
-        rest = [rest[0].max(r[0]), rest[1].max(r[1])];
-        y += 0.01;
-    }
+    // Cloth hangs: going down from the waist the radius never shrinks, so each section
+    // takes the largest body envelope at or above it (a running maximum), then the
+    // flare below the hips. This follows the waist, drapes over the hips without a step
+    // and clears the buttocks and thighs.
+    let envelope_above = |y: f64| {
+        let mut r = [0.0f64; 2];
+        let mut t = top_y;
+        while t >= y {
+            let (e, _) = body_envelope(m, t);
+            r = [r[0].max(e[0]), r[1].max(e[1])];
+            t -= 0.005;
+        }
+        let (e, _) = body_envelope(m, y);
+        [r[0].max(e[0]), r[1].max(e[1])]
+    };
     (0..=count)
         .map(|s| {
             let y = hem_y + (top_y - hem_y) * s as f64 / count as f64;
-            let (env, cz) = body_envelope(m, y);
+            let (_, cz) = body_envelope(m, y);
             let below = (hip_y - y).max(0.0);
             let extra = 0.6 * flare * below;
-            let radii = if y < hip_y {
-                [
-                    (rest[0] + extra).max(env[0]) + ease,
-                    (rest[1] + extra).max(env[1]) + ease,
-                ]
-            } else {
-                [env[0] + ease, env[1] + ease]
-            };
+            let env = envelope_above(y);
+            let radii = [env[0] + extra + ease, env[1] + extra + ease];
             let toward_hem = (below / (hip_y - hem_y).max(1e-3)).clamp(0.0, 1.0);
             Section {
                 y,

@@ -133,7 +133,8 @@ pub fn sleeve(
         / n;
     let length = (end_x - start_x).max(2.0 * h);
     let count = segments(length, h).max(2);
-    let transition = 0.12;
+    // Narrow to the arm within the sleeve even when it is short.
+    let transition = (0.6 * length).min(0.12);
     let rings: Vec<ExtrudeRing> = (1..=count)
         .map(|s| {
             let d = length * s as f64 / count as f64;
