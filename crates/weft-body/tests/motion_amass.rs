@@ -125,6 +125,21 @@ fn z_up_files_are_turned_y_up_about_the_rest_pelvis() {
     // The head is above the pelvis: the body stands up in Y-up.
     assert!(joints[15][1] > p.y + 0.4);
 
+    // Driving a body whose pelvis is elsewhere (weft's default body has it at the
+    // origin) puts that body's pelvis at the same place in the world.
+    let other = AmassOptions {
+        target_pelvis: [0.0; 3],
+        ..AmassOptions::default()
+    };
+    let (m0, _) = read_amass(&path, &other).unwrap();
+    let t0 = m0.trans()[0];
+    let p0 = Vector3::new(f64::from(t0[0]), f64::from(t0[1]), f64::from(t0[2]));
+    assert!((p0 - Vector3::new(0.1, 0.95, -0.2)).norm() < 1e-6, "{p0}");
+    let back0 = dir.path("back0.npz");
+    write_amass(&back0, &m0, &other).unwrap();
+    let (again, _) = read_amass(&back0, &other).unwrap();
+    assert!(again.distance(&m0).unwrap().translation < 1e-6);
+
     // Written back Z up, the root orientation and translation are AMASS's again.
     let out = dir.path("back.npz");
     write_amass(&out, &m, &AmassOptions::default()).unwrap();

@@ -23,12 +23,16 @@
 //! **Axes.** AMASS is Z up (its root orientation includes the turn from SMPL's Y-up
 //! model frame to the capture's Z-up world). weft is Y up, so reading turns the world by
 //! `C` = −90° about X ((x, y, z) → (x, z, −y)). SMPL rotates the root about the rest
-//! pelvis J₀ and adds `trans` afterwards, so the posed pelvis lies at `J₀ + trans` *in
-//! the file's world*; the Y-up motion is therefore `R₀' = C·R₀` and
-//! `trans' = C·(trans + J₀) − J₀`. J₀ depends on the body (β): pass the body's own in
-//! [`AmassOptions::rest_pelvis`]; the default is the built-in rest skeleton's, which
-//! puts the feet of an average body on the floor. Writing applies the inverse with the
-//! same J₀, so a round trip is exact. Files already Y up are read with [`UpAxis::Y`].
+//! pelvis J₀ *in model coordinates* and adds `trans` afterwards, so the posed pelvis
+//! lies at `J₀ˢ + trans` in the file's world, J₀ˢ being the pelvis of the body the
+//! capture was fitted with (SMPL-H at the file's β). In weft the posed pelvis is
+//! `J₀ᵗ + trans'`, J₀ᵗ the pelvis of the body the motion will drive; equating the two
+//! positions gives `R₀' = C·R₀` and `trans' = C·(trans + J₀ˢ) − J₀ᵗ`.
+//! [`AmassOptions::source_pelvis`] defaults to the built-in SMPL-like skeleton's pelvis
+//! (SMPL's own J₀ varies with β by a few centimetres) and
+//! [`AmassOptions::target_pelvis`] should be the driven body's (weft's default body has
+//! its pelvis at the origin). Writing applies the inverse with the same two, so a round
+//! trip is exact. Files already Y up are read with [`UpAxis::Y`].
 //!
 //! **Size.** The `.npz` reader bounds every member by its archive entry (and at most
 //! 8 GiB inflated); poses longer than [`MAX_FRAMES`](super::MAX_FRAMES) are refused.
@@ -53,9 +57,11 @@ const SHARED_JOINTS: usize = 22;
 pub struct AmassOptions {
     /// The file's up axis; AMASS is Z up.
     pub up: UpAxis,
-    /// The rest pelvis joint J₀ of the body the motion drives (metres, SMPL's Y-up model
-    /// frame), used to convert the root translation between up axes.
-    pub rest_pelvis: [f64; 3],
+    /// The rest pelvis J₀ˢ of the body the file's parameters belong to (metres, SMPL's
+    /// Y-up model frame): SMPL's, for AMASS.
+    pub source_pelvis: [f64; 3],
+    /// The rest pelvis J₀ᵗ of the body the motion drives.
+    pub target_pelvis: [f64; 3],
     /// Frames per second to use when the file records none; `None` makes a missing
     /// frame rate an error.
     pub fps_if_missing: Option<f64>,
@@ -65,7 +71,8 @@ impl Default for AmassOptions {
     fn default() -> Self {
         AmassOptions {
             up: UpAxis::Z,
-            rest_pelvis: DEFAULT_REST_JOINTS[0],
+            source_pelvis: DEFAULT_REST_JOINTS[0],
+            target_pelvis: DEFAULT_REST_JOINTS[0],
             fps_if_missing: None,
         }
     }
@@ -148,7 +155,7 @@ pub fn amass_from_npz(
 ) -> Result<(Motion, AmassReport), MotionError> {
     let path = npz.path().to_path_buf();
     let bad = |key: &str, message: String| MotionError::npz(&path, key, message);
-    check_pelvis(&options.rest_pelvis)?;
+    check_pelvis(options)?;
 
     // Poses.
     let (layout, n, poses_flat, stride) = if npz.contains("poses") || !npz.contains("pose_body") {
@@ -263,7 +270,10 @@ pub fn amass_from_npz(
 
     // Convert.
     let c = options.up.to_y_up();
-    let j0 = Vector3::from(options.rest_pelvis);
+    let (j0s, j0t) = (
+        Vector3::from(options.source_pelvis),
+        Vector3::from(options.target_pelvis),
+    );
     let shared = if layout == PoseLayout::Smpl {
         SMPL_JOINT_COUNT
     } else {
@@ -287,7 +297,7 @@ pub fn amass_from_npz(
             trans.data[3 * t + 1],
             trans.data[3 * t + 2],
         );
-        let p = c * (tr + j0) - j0;
+        let p = c * (tr + j0s) - j0t;
         poses.push(pose);
         out_trans.push([p.x as f32, p.y as f32, p.z as f32]);
     }
@@ -332,23 +342,30 @@ fn scalar(npz: &mut Npz, key: &str) -> Result<f64, MotionError> {
     data.first().copied().ok_or_else(|| wrong(npz, &[0]))
 }
 
-fn check_pelvis(p: &[f64; 3]) -> Result<(), MotionError> {
-    if p.iter().all(|x| x.is_finite()) {
-        Ok(())
-    } else {
-        Err(MotionError::Parameter(format!(
-            "rest pelvis {p:?}; expected finite coordinates"
-        )))
+fn check_pelvis(options: &AmassOptions) -> Result<(), MotionError> {
+    for (which, p) in [
+        ("source", options.source_pelvis),
+        ("target", options.target_pelvis),
+    ] {
+        if !p.iter().all(|x| x.is_finite()) {
+            return Err(MotionError::Parameter(format!(
+                "{which} rest pelvis {p:?}; expected finite coordinates"
+            )));
+        }
     }
+    Ok(())
 }
 
 /// The AMASS-style arrays of a motion: `poses` (N, 72) in SMPL's layout, `trans`
 /// (N, 3), `mocap_framerate` (a 0-d array) and, when the motion records a shape,
 /// `betas` (B,), all `float64` as AMASS stores them, converted to `options.up`.
 pub fn amass_npz(motion: &Motion, options: &AmassOptions) -> Result<NpzWriter, MotionError> {
-    check_pelvis(&options.rest_pelvis)?;
+    check_pelvis(options)?;
     let c_inv = options.up.to_y_up().inverse();
-    let j0 = Vector3::from(options.rest_pelvis);
+    let (j0s, j0t) = (
+        Vector3::from(options.source_pelvis),
+        Vector3::from(options.target_pelvis),
+    );
     let n = motion.frame_count();
     let mut poses = Vec::with_capacity(n * 3 * SMPL_JOINT_COUNT);
     let mut trans = Vec::with_capacity(n * 3);
@@ -359,7 +376,7 @@ pub fn amass_npz(motion: &Motion, options: &AmassOptions) -> Result<NpzWriter, M
             poses.extend(r.iter().map(|&x| f64::from(x)));
         }
         let tr = Vector3::new(f64::from(t[0]), f64::from(t[1]), f64::from(t[2]));
-        let p = c_inv * (tr + j0) - j0;
+        let p = c_inv * (tr + j0t) - j0s;
         trans.extend([p.x, p.y, p.z]);
     }
     let mut w = NpzWriter::new(false);

@@ -41,12 +41,15 @@ impl MotionFormat {
 /// Options of [`read_motion`] and [`write_motion`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct MotionFileOptions {
-    /// Rest joints of the body the motion drives (J(β)): the pelvis converts AMASS's
-    /// Z-up translation, all of them shape the BVH skeleton written and the retargeting
-    /// target read.
+    /// Rest joints of the body the motion drives (J(β)): the pelvis places AMASS's
+    /// root translation on it, all of them shape the BVH skeleton written and the
+    /// retargeting target read.
     pub rest_joints: [[f64; 3]; SMPL_JOINT_COUNT],
     /// Up axis of `.npz` files (AMASS: Z).
     pub npz_up: UpAxis,
+    /// Rest pelvis of the body `.npz` parameters belong to (see
+    /// [`AmassOptions::source_pelvis`]); SMPL-like by default.
+    pub npz_source_pelvis: [f64; 3],
     /// Frame rate for `.npz` files that record none.
     pub fps_if_missing: Option<f64>,
     /// Joint-name map for `.bvh` files.
@@ -62,6 +65,7 @@ impl Default for MotionFileOptions {
         MotionFileOptions {
             rest_joints: DEFAULT_REST_JOINTS,
             npz_up: UpAxis::Z,
+            npz_source_pelvis: DEFAULT_REST_JOINTS[0],
             fps_if_missing: None,
             bvh_map: MapChoice::Auto,
             bvh_units: BvhUnits::Auto,
@@ -75,7 +79,8 @@ impl MotionFileOptions {
     pub fn amass(&self) -> AmassOptions {
         AmassOptions {
             up: self.npz_up,
-            rest_pelvis: self.rest_joints[0],
+            source_pelvis: self.npz_source_pelvis,
+            target_pelvis: self.rest_joints[0],
             fps_if_missing: self.fps_if_missing,
         }
     }

@@ -5,13 +5,13 @@ use clap::{Args, Subcommand, ValueEnum};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::PathBuf;
+use weft_body::default_body::DEFAULT_BODY_NAME;
 use weft_body::joints::SMPL_JOINT_COUNT;
 use weft_body::motion::{
     generate, motion_stats, read_motion, write_motion, BvhUnits, MapChoice, MotionFileOptions,
     MotionFormat, MotionKind, MotionSource, NameMap, ProceduralParams, SkeletonPreset, UpAxis,
-    DEFAULT_REST_JOINTS,
 };
-use weft_body::BodyModel;
+use weft_body::{default_body, BodyModel};
 
 use super::emit;
 
@@ -76,37 +76,31 @@ pub struct GenerateArgs {
 #[derive(Args)]
 struct BodyArgs {
     /// A body model in the SMPL .npz layout whose rest joints shape the BVH skeleton,
-    /// the retargeting target and AMASS's Z-up root conversion; default: weft's
-    /// built-in adult rest skeleton.
+    /// the retargeting target and the placement of AMASS's root; default: weft's
+    /// default body.
     #[arg(long)]
     body: Option<PathBuf>,
-    /// Shape coefficients β of that body, comma-separated (missing ones are 0).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        allow_hyphen_values = true,
-        requires = "body"
-    )]
+    /// Shape coefficients β of the body, comma-separated (missing ones are 0).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     betas: Vec<f64>,
 }
 
 impl BodyArgs {
     fn rest_joints(&self) -> Result<[[f64; 3]; SMPL_JOINT_COUNT]> {
-        let Some(path) = &self.body else {
-            return Ok(DEFAULT_REST_JOINTS);
+        let (model, name) = match &self.body {
+            Some(path) => (BodyModel::load(path)?, path.display().to_string()),
+            None => (default_body()?, DEFAULT_BODY_NAME.to_string()),
         };
-        let model = BodyModel::load(path)?;
         let mut betas = self.betas.clone();
         if betas.len() < model.num_betas() {
             betas.resize(model.num_betas(), 0.0);
         }
         let joints = model
             .joints(&betas)
-            .with_context(|| format!("{}: rest joints", path.display()))?;
+            .with_context(|| format!("{name}: rest joints"))?;
         joints.try_into().map_err(|j: Vec<[f64; 3]>| {
             anyhow::anyhow!(
-                "{}: the body has {} joints; motions drive SMPL's {SMPL_JOINT_COUNT}",
-                path.display(),
+                "{name}: the body has {} joints; motions drive SMPL's {SMPL_JOINT_COUNT}",
                 j.len()
             )
         })
