@@ -410,3 +410,102 @@ fn import(args: &ImportArgs) -> Result<()> {
     writeln!(out, "  rest height (β = 0): {height:.3} m")?;
     emit(&out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use weft_body::motion::{generate, write_motion, MotionKind, ProceduralParams};
+    use weft_mesh::io::read_mesh;
+
+    fn temp(tag: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("weft-cli-body-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn default_arg() -> BodyArg {
+        BodyArg { body: None }
+    }
+
+    #[test]
+    fn export_writes_the_rest_mesh_and_a_model() {
+        let d = temp("export");
+        let obj = d.join("b.obj");
+        export(&ExportArgs {
+            body: default_arg(),
+            betas: vec![2.0],
+            out: obj.clone(),
+        })
+        .unwrap();
+        let mesh = read_mesh(&obj).unwrap();
+        assert_eq!(mesh.vertex_count(), 13_380);
+        let h = mesh.bounding_box().map(|b| b.max[1] - b.min[1]).unwrap();
+        assert!((1.8..1.95).contains(&h), "{h}");
+        // The .npz has β baked in: at β = 0 it is the β = 2 body.
+        let npz = d.join("b.npz");
+        export(&ExportArgs {
+            body: default_arg(),
+            betas: vec![2.0],
+            out: npz.clone(),
+        })
+        .unwrap();
+        let m = BodyModel::load(&npz).unwrap();
+        let rest = m.shape(&[]).unwrap();
+        for (a, b) in rest.positions.iter().zip(&mesh.positions) {
+            assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-6));
+        }
+        // Too many betas name the model and the limit.
+        let e = export(&ExportArgs {
+            body: default_arg(),
+            betas: vec![0.0; 11],
+            out: d.join("c.obj"),
+        })
+        .unwrap_err();
+        assert!(e.to_string().contains("11 shape coefficients"), "{e}");
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn pose_writes_one_frame_or_all() {
+        let d = temp("pose");
+        let mut p = ProceduralParams::new(MotionKind::Walk);
+        p.frames = 5;
+        let motion_path = d.join("walk.npz");
+        write_motion(
+            &motion_path,
+            &generate(&p).unwrap(),
+            &MotionFileOptions::default(),
+        )
+        .unwrap();
+        let args = |frame, all, out: PathBuf| PoseArgs {
+            body: default_arg(),
+            betas: vec![0.0],
+            motion: motion_path.clone(),
+            frame,
+            all_frames: all,
+            skinning: SkinningArg::Dqs,
+            out,
+        };
+        pose(&args(3, false, d.join("f3.obj"))).unwrap();
+        assert_eq!(read_mesh(&d.join("f3.obj")).unwrap().vertex_count(), 13_380);
+        pose(&args(0, true, d.join("all"))).unwrap();
+        assert_eq!(std::fs::read_dir(d.join("all")).unwrap().count(), 5);
+        let e = pose(&args(5, false, d.join("f5.obj"))).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("frame 5 asked for but the motion has 5 frames"),
+            "{e}"
+        );
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn info_of_a_missing_file_names_it() {
+        let e = load(&BodyArg {
+            body: Some("/no/such/body.npz".into()),
+        })
+        .unwrap_err();
+        assert!(e.to_string().starts_with("/no/such/body.npz"), "{e}");
+    }
+}
