@@ -7,6 +7,7 @@
 //! plus the margin along the outward direction, the same step a drape's first frame
 //! performs, so the template starts collision-free for the simulator.
 
+use weft_body::features::{transfer_weights, SkinningWeights};
 use weft_body::query::BodySurface;
 use weft_body::BodyModel;
 use weft_mesh::TriMesh;
@@ -83,6 +84,33 @@ impl FitBody {
                 *p = add(c.point, scale(out, margin));
             }
         }
+        Ok(())
+    }
+
+    /// Fills `garment.weights` with `model`'s skinning weights transferred to the
+    /// garment vertices (closest body surface point, barycentric; weft-body's
+    /// `features::transfer`), for the LBS baselines and for initialising sequences. The
+    /// garment must have been built by [`FitBody::generate`] on this body.
+    pub fn transfer_weights(
+        &self,
+        model: &BodyModel,
+        garment: &mut Garment,
+    ) -> Result<(), GarmentError> {
+        let w = model.weights();
+        let (n, s) = (w.vertex_count(), w.joint_count());
+        let mut dense = vec![0.0; n * s];
+        for v in 0..n {
+            for (j, x) in w.influences(v) {
+                if let Some(slot) = dense.get_mut(v * s + j) {
+                    *slot = x;
+                }
+            }
+        }
+        let body_weights = SkinningWeights::new(dense, s)
+            .map_err(|e| GarmentError::Measurements(format!("body skinning weights: {e}")))?;
+        let t = transfer_weights(&self.surface, &body_weights, &garment.mesh.positions)
+            .map_err(|e| GarmentError::Measurements(format!("weight transfer: {e}")))?;
+        garment.weights = Some(t.weights);
         Ok(())
     }
 }

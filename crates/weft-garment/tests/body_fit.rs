@@ -67,3 +67,30 @@ fn garments_lie_outside_the_default_body() {
     }
     assert_eq!(failures, 0, "garments penetrate the body");
 }
+
+#[test]
+fn transferred_weights_follow_the_limbs() {
+    let Some(model) = default_body() else { return };
+    let fit = FitBody::new(&model, &[]).expect("fit body");
+    let mut g = fit
+        .generate(
+            GarmentKind::LongSleeve,
+            &Style::from_seed(GarmentKind::LongSleeve, 0),
+            2000,
+        )
+        .expect("generate");
+    fit.transfer_weights(&model, &mut g).expect("transfer");
+    let w = g.weights.as_ref().expect("weights");
+    assert_eq!(w.vertex_count(), g.mesh.vertex_count());
+    assert_eq!(w.joint_count(), model.joint_count());
+    for v in 0..w.vertex_count() {
+        let sum: f64 = w.row(v).iter().sum();
+        assert!((sum - 1.0).abs() < 1e-9, "row {v} sums to {sum}");
+    }
+    // The vertex farthest out on the left sleeve follows the left forearm/wrist/hand.
+    let cuff = (0..g.mesh.vertex_count())
+        .max_by(|&a, &b| g.mesh.positions[a][0].total_cmp(&g.mesh.positions[b][0]))
+        .expect("vertices");
+    let arm: f64 = [18usize, 20, 22].iter().map(|&j| w.row(cuff)[j]).sum();
+    assert!(arm > 0.5, "cuff vertex weights {:?}", w.row(cuff));
+}
