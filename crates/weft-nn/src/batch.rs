@@ -30,6 +30,13 @@ impl GraphBatch {
         if graphs.is_empty() {
             return Err(NnError::EmptyBatch);
         }
+        let total: usize = graphs.iter().map(|g| g.vertex_count()).sum();
+        if u32::try_from(total).is_err() {
+            return Err(NnError::Config(format!(
+                "a batch holds at most {} nodes, got {total}",
+                u32::MAX
+            )));
+        }
         let mut offsets = vec![0usize];
         let mut edges = Vec::new();
         for g in graphs {
@@ -40,13 +47,6 @@ impl GraphBatch {
                     .map(|[a, b]| [a + base as u32, b + base as u32]),
             );
             offsets.push(base + g.vertex_count());
-        }
-        let total = *offsets.last().unwrap_or(&0);
-        if u32::try_from(total).is_err() {
-            return Err(NnError::Config(format!(
-                "a batch holds at most {} nodes, got {total}",
-                u32::MAX
-            )));
         }
         let graph = Graph::from_edges(total, &edges);
         Ok(GraphBatch {

@@ -99,7 +99,7 @@ pub(crate) fn glorot<const D: usize>(
     fan_out: usize,
     device: &Device,
 ) -> Param<Tensor<D>> {
-    Initializer::XavierUniform { gain: 1.0 }.init_with(shape, Some(fan_in), Some(fan_out), device)
+    crate::init::glorot().init_with(shape, Some(fan_in), Some(fan_out), device)
 }
 
 impl GatBlockConfig {
@@ -141,7 +141,7 @@ impl GatBlockConfig {
         let self_stream = self.self_width().map(|width| {
             LinearConfig::new(self.d_input, width)
                 .with_bias(false)
-                .with_initializer(Initializer::XavierUniform { gain: 1.0 })
+                .with_initializer(crate::init::glorot())
                 .init(device)
         });
         Ok(GatBlock {

@@ -32,6 +32,9 @@ use crate::flex::{contiguous, elements, from_vec};
 pub trait GatOps: Backend {
     /// `out_i = Σ_{j∈N(i)} α_ij z_j` per head with `α` the per-destination softmax of
     /// `LeakyReLU(a_dst·z_i + a_src·z_j)`; see [`super::kernel`] for the equations.
+    ///
+    /// Low level: shapes are not checked here and only f32/f64 flex tensors are
+    /// supported; call [`super::attention`], which checks and routes.
     fn gat_attention(
         z: FloatTensor<Self>,
         a_src: FloatTensor<Self>,

@@ -19,3 +19,22 @@ pub fn cosine_annealing(initial_lr: f64, min_lr: f64, steps: usize) -> Result<Mo
         .init()
         .map_err(NnError::Config)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cosine_annealing_runs_from_the_initial_to_the_minimum_rate() {
+        let mut schedule = cosine_annealing(3e-3, 1e-5, 4).unwrap();
+        let rates: Vec<f64> = (0..5).map(|_| schedule.step().base()).collect();
+        assert!((rates[0] - 3e-3).abs() < 1e-12);
+        assert!((rates[2] - (1e-5 + 0.5 * (3e-3 - 1e-5))).abs() < 1e-12);
+        assert!((rates[4] - 1e-5).abs() < 1e-12);
+        assert!(rates.windows(2).all(|w| w[1] <= w[0]));
+        assert!(matches!(
+            cosine_annealing(3e-3, 0.0, 0),
+            Err(NnError::Config(_))
+        ));
+    }
+}
