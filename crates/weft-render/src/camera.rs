@@ -7,7 +7,7 @@
 
 use weft_mesh::Aabb;
 
-use crate::math::{add, cross, dot, normalize, scale, sub, V3};
+use crate::math::{add, cross, dot, is_finite, normalize, scale, sub, V3};
 
 /// Vertical field of view of every preset: narrow enough that garments are not
 /// distorted, wide enough to read as a perspective picture.
@@ -86,49 +86,80 @@ pub struct Camera {
 
 impl Camera {
     /// A camera looking at `bbox` from `view`, at the distance where the whole box fits a
-    /// picture of width/height `aspect` with a margin, and centred on the box's picture.
-    ///
-    /// Fitting uses the eight box corners under perspective, then shifts the target so
-    /// the projected box is centred (three passes; the shift barely changes the fit).
+    /// picture of width/height `aspect` with a margin, centred on the box's picture.
     pub fn frame(view: View, bbox: &Aabb, aspect: f64) -> Camera {
+        let corners: Vec<V3> = (0..8)
+            .map(|i| {
+                [
+                    if i & 1 == 0 { bbox.min[0] } else { bbox.max[0] },
+                    if i & 2 == 0 { bbox.min[1] } else { bbox.max[1] },
+                    if i & 4 == 0 { bbox.min[2] } else { bbox.max[2] },
+                ]
+            })
+            .collect();
+        Self::frame_points(view, &corners, aspect).unwrap_or(Camera {
+            eye: [0.0, 0.0, 1.0],
+            target: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            fov_y_deg: DEFAULT_FOV_Y_DEG,
+        })
+    }
+
+    /// A camera looking from `view` at the finite `points` (the vertices to be drawn), at
+    /// the distance where all of them fit a picture of width/height `aspect` with a
+    /// margin, centred on their picture. `None` without a finite point.
+    ///
+    /// Fitting the points themselves rather than their bounding box keeps the subject
+    /// large from every side: the corners of a T-posed body's box seen from the side are
+    /// far nearer the camera than any vertex. Three passes alternate the distance and a
+    /// sideways shift that centres the projected points; a last pass sets the distance.
+    pub fn frame_points(view: View, points: &[[f64; 3]], aspect: f64) -> Option<Camera> {
         let aspect = if aspect.is_finite() && aspect > 0.0 {
             aspect
         } else {
             1.0
         };
-        let center = scale(add(bbox.min, bbox.max), 0.5);
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in points.iter().filter(|p| is_finite(**p)) {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        if lo[0] > hi[0] {
+            return None;
+        }
+        let center = scale(add(lo, hi), 0.5);
+        let size = sub(hi, lo);
         let d = view.direction();
         let up = [0.0, 1.0, 0.0];
         let (right, up_v) = basis(scale(d, -1.0), up);
         let ty = (DEFAULT_FOV_Y_DEG.to_radians() * 0.5).tan() * FILL;
         let tx = ty * aspect;
-        let corners: Vec<V3> = (0..8)
-            .map(|i| {
-                let p = [
-                    if i & 1 == 0 { bbox.min[0] } else { bbox.max[0] },
-                    if i & 2 == 0 { bbox.min[1] } else { bbox.max[1] },
-                    if i & 4 == 0 { bbox.min[2] } else { bbox.max[2] },
-                ];
-                sub(p, center)
+        // Camera-frame coordinates (right, up, towards the camera) around the centre.
+        let local: Vec<V3> = points
+            .iter()
+            .filter(|p| is_finite(**p))
+            .map(|&p| {
+                let c = sub(p, center);
+                [dot(c, right), dot(c, up_v), dot(c, d)]
             })
             .collect();
         let (mut ox, mut oy) = (0.0, 0.0);
-        let mut dist = 0.0;
-        for _ in 0..3 {
-            dist = corners
+        let fit = |ox: f64, oy: f64| {
+            let dist = local
                 .iter()
-                .map(|&c| {
-                    let (x, y, z) = (dot(c, right) - ox, dot(c, up_v) - oy, dot(c, d));
-                    (z + x.abs() / tx).max(z + y.abs() / ty)
-                })
+                .map(|c| (c[2] + (c[0] - ox).abs() / tx).max(c[2] + (c[1] - oy).abs() / ty))
                 .fold(0.0, f64::max);
-            // A flat box seen edge-on still needs some distance.
-            let size = sub(bbox.max, bbox.min);
-            dist = dist.max(1e-3 * dot(size, size).sqrt()).max(1e-9);
+            // A flat subject seen edge-on still needs some distance.
+            dist.max(1e-3 * dot(size, size).sqrt()).max(1e-9)
+        };
+        for _ in 0..3 {
+            let dist = fit(ox, oy);
             let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-            for &c in &corners {
-                let depth = dist - dot(c, d);
-                let s = [(dot(c, right) - ox) / depth, (dot(c, up_v) - oy) / depth];
+            for c in &local {
+                let depth = dist - c[2];
+                let s = [(c[0] - ox) / depth, (c[1] - oy) / depth];
                 for k in 0..2 {
                     lo[k] = lo[k].min(s[k]);
                     hi[k] = hi[k].max(s[k]);
@@ -137,13 +168,14 @@ impl Camera {
             ox += 0.5 * (lo[0] + hi[0]) * dist;
             oy += 0.5 * (lo[1] + hi[1]) * dist;
         }
+        let dist = fit(ox, oy);
         let target = add(center, add(scale(right, ox), scale(up_v, oy)));
-        Camera {
+        Some(Camera {
             eye: add(target, scale(d, dist)),
             target,
             up,
             fov_y_deg: DEFAULT_FOV_Y_DEG,
-        }
+        })
     }
 
     /// The projection of this camera onto a `width × height` pixel grid.

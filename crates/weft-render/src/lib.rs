@@ -5,8 +5,9 @@
 //!
 //! Why a software rasteriser: pictures are made on CI machines and servers without a GPU
 //! or a display, and they are compared across runs, so drawing must need nothing from
-//! the system and give the same bytes for the same input. A z-buffer over a few tens of
-//! thousands of triangles at 1024 × 1024 takes milliseconds on a CPU, so nothing is lost.
+//! the system and give the same bytes for the same input. A z-buffer over a garment and a
+//! body (40 000 triangles) at 1024 × 1024 with 2 × 2 supersampling takes about 0.15 s on
+//! one CPU core, which is nothing next to simulating or training.
 //!
 //! ```
 //! use weft_render::{render, Colormap, Paint, RenderOptions, ScalarPaint, ScalarRange, SceneMesh};

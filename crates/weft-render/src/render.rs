@@ -10,7 +10,7 @@ use crate::legend::{Legend, INK};
 use crate::math::{dot, normalize, scale, sub};
 use crate::raster::Target;
 use crate::scene::{
-    bounds, prepare, shared_ranges, FaceKind, MeshStats, Paint, Prepared, SceneMesh,
+    drawn_points, prepare, shared_ranges, FaceKind, MeshStats, Paint, Prepared, SceneMesh,
 };
 use crate::shading::{face_normal, lit, Shading};
 
@@ -116,8 +116,9 @@ pub fn render(meshes: &[SceneMesh<'_>], opts: &RenderOptions) -> Result<Rendered
     let legend = opts.legend.then(|| legend_of(meshes, &ranges)).flatten();
     let panel = legend.map_or(0, |l| l.width(&style, opts.height, opts.width));
     let vw = opts.width - panel;
-    let bbox = bounds(&prepared).ok_or_else(|| empty(meshes))?;
-    let camera = Camera::frame(opts.view, &bbox, f64::from(vw) / f64::from(opts.height));
+    let points = drawn_points(&prepared);
+    let camera = Camera::frame_points(opts.view, &points, f64::from(vw) / f64::from(opts.height))
+        .ok_or_else(|| empty(meshes))?;
     let view = draw_meshes(&prepared, &ranges, &camera, vw, opts.height, opts);
     let mut image = Image::new(opts.width, opts.height, opts.background);
     image.blit(&view, 0, 0);

@@ -10,7 +10,7 @@
 //! component gone bad) are skipped. Every case is counted in [`MeshStats`], so callers
 //! can report what the picture shows.
 
-use weft_mesh::{Aabb, TriMesh};
+use weft_mesh::TriMesh;
 
 use crate::colormap::{Colormap, ScalarRange};
 use crate::error::RenderError;
@@ -253,28 +253,31 @@ fn fill_from_neighbours(positions: &mut [V3], faces: &[[u32; 3]], bad: &[bool]) 
     }
 }
 
-/// Bounding box of the usable positions of vertices in drawn faces, over all meshes.
-pub(crate) fn bounds<'a, I>(prepared: I) -> Option<Aabb>
+/// Positions of the vertices of drawn (not skipped) faces, over all meshes: what the
+/// camera has to frame.
+pub(crate) fn drawn_points<'a, I>(prepared: I) -> Vec<V3>
 where
     I: IntoIterator<Item = &'a Prepared<'a>>,
 {
-    let mut b: Option<Aabb> = None;
+    let mut out = Vec::new();
     for p in prepared {
+        let mut used = vec![false; p.positions.len()];
         for (f, kind) in p.mesh.faces.iter().zip(&p.face_kind) {
-            if *kind == FaceKind::Skip {
-                continue;
-            }
-            for &i in f {
-                let q = p.positions[i as usize];
-                let bb = b.get_or_insert(Aabb { min: q, max: q });
-                for (k, &c) in q.iter().enumerate() {
-                    bb.min[k] = bb.min[k].min(c);
-                    bb.max[k] = bb.max[k].max(c);
+            if *kind != FaceKind::Skip {
+                for &i in f {
+                    used[i as usize] = true;
                 }
             }
         }
+        out.extend(
+            p.positions
+                .iter()
+                .zip(&used)
+                .filter(|(_, &u)| u)
+                .map(|(q, _)| *q),
+        );
     }
-    b
+    out
 }
 
 /// The resolved colour range of each mesh's scalars (`None` for solid paint), computed
@@ -351,8 +354,9 @@ mod tests {
             c[0] > 1.0 && c[0] < 3.5 && c[2] > 1.0 && c[2] < 3.5,
             "{c:?}"
         );
-        let b = bounds(&p).unwrap();
-        assert_eq!((b.min, b.max), ([0.0; 3], [4.0, 0.0, 4.0]));
+        let points = drawn_points(&p);
+        assert_eq!(points.len(), 25);
+        assert!(points.iter().all(|&q| is_finite(q)));
     }
 
     #[test]
@@ -364,7 +368,7 @@ mod tests {
         let meshes = [solid(&m)];
         let p = prepare(&meshes).unwrap();
         assert_eq!(p[0].stats.skipped_faces, 2);
-        assert!(bounds(&p).is_none());
+        assert!(drawn_points(&p).is_empty());
     }
 
     #[test]

@@ -6,15 +6,13 @@
 //! read across tiles instead of being normalised away per frame. The legend is drawn
 //! once, beside the grid.
 
-use weft_mesh::Aabb;
-
 use crate::camera::{Camera, View};
 use crate::error::RenderError;
 use crate::font::{Align, TextStyle};
 use crate::image::{check_size, Image, Rgb};
 use crate::legend::{Legend, INK};
 use crate::render::{draw_meshes, empty, legend_of, overlay_text, RenderOptions, Rendered};
-use crate::scene::{bounds, prepare, shared_ranges, MeshStats, Prepared, SceneMesh};
+use crate::scene::{drawn_points, prepare, shared_ranges, MeshStats, Prepared, SceneMesh};
 
 /// Colour of the lines between tiles.
 const GRID_LINE: Rgb = [222, 222, 226];
@@ -34,7 +32,8 @@ struct Shared<'a> {
     prepared: Vec<Vec<Prepared<'a>>>,
     ranges: Vec<Option<(f64, f64)>>,
     legend: Option<Legend<'a>>,
-    bbox: Aabb,
+    /// Every drawn vertex of every frame: one framing for all.
+    points: Vec<[f64; 3]>,
     stats: Vec<MeshStats>,
 }
 
@@ -56,18 +55,27 @@ fn share<'a>(
         .legend
         .then(|| frames.iter().find_map(|f| legend_of(f, &ranges)))
         .flatten();
-    let bbox = bounds(prepared.iter().flatten()).ok_or_else(|| {
+    let points = drawn_points(prepared.iter().flatten());
+    if points.is_empty() {
         let all: Vec<SceneMesh<'_>> = frames.iter().flatten().cloned().collect();
-        empty(&all)
-    })?;
+        return Err(empty(&all));
+    }
     let stats = sum_stats(&prepared);
     Ok(Shared {
         prepared,
         ranges,
         legend,
-        bbox,
+        points,
         stats,
     })
+}
+
+impl Shared<'_> {
+    /// The camera for `view` that frames every frame's drawn vertices.
+    fn frame(&self, view: View, aspect: f64) -> Result<Camera, RenderError> {
+        Camera::frame_points(view, &self.points, aspect)
+            .ok_or_else(|| RenderError::Empty("no face has a finite vertex position".into()))
+    }
 }
 
 /// Per mesh index, the statistics summed over frames (named after the first frame).
@@ -103,7 +111,7 @@ pub fn render_sequence(
 ) -> Result<Rendered, RenderError> {
     let shared = share(frames, opts)?;
     let aspect = f64::from(opts.width) / f64::from(opts.height);
-    let camera = Camera::frame(opts.view, &shared.bbox, aspect);
+    let camera = shared.frame(opts.view, aspect)?;
     let tiles: Vec<Tile<'_, '_>> = shared
         .prepared
         .iter()
@@ -143,13 +151,13 @@ pub fn render_turntable(
                 View::Orbit { azimuth_deg, .. } => format!("{}°", azimuth_deg.round()),
                 _ => String::new(),
             };
-            Tile {
+            Ok(Tile {
                 prepared: &shared.prepared[0],
-                camera: Camera::frame(view, &shared.bbox, aspect),
+                camera: shared.frame(view, aspect)?,
                 label,
-            }
+            })
         })
-        .collect();
+        .collect::<Result<_, RenderError>>()?;
     let first = tiles[0].camera;
     draw_sheet(&tiles, &shared, opts, columns, first)
 }
@@ -167,11 +175,7 @@ pub fn render_frames(
         .legend
         .map_or(0, |l| l.width(&style, opts.height, opts.width));
     let vw = opts.width - panel;
-    let camera = Camera::frame(
-        opts.view,
-        &shared.bbox,
-        f64::from(vw) / f64::from(opts.height),
-    );
+    let camera = shared.frame(opts.view, f64::from(vw) / f64::from(opts.height))?;
     let mut out = Vec::with_capacity(frames.len());
     for (i, p) in shared.prepared.iter().enumerate() {
         let view = draw_meshes(p, &shared.ranges, &camera, vw, opts.height, opts);

@@ -66,6 +66,32 @@ proptest! {
         }
     }
 
+    /// Framing a point cloud keeps every point inside the picture and fills it: the
+    /// tighter direction reaches at least 85 % of the picture.
+    #[test]
+    fn framing_points_keeps_them_in_the_picture(
+        points in prop::collection::vec(prop::array::uniform3(-2.0f64..2.0), 2..60),
+        azimuth in 0.0f64..360.0,
+        elevation in -60.0f64..60.0,
+        aspect in 0.3f64..3.0,
+    ) {
+        let view = View::Orbit { azimuth_deg: azimuth, elevation_deg: elevation };
+        let cam = Camera::frame_points(view, &points, aspect).expect("finite points");
+        let (w, h) = (100.0 * aspect, 100.0);
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for &p in &points {
+            let (x, y) = project(&cam, p, w, h);
+            prop_assert!(x >= -1e-6 && x <= w + 1e-6 && y >= -1e-6 && y <= h + 1e-6, "{x} {y}");
+            lo = [lo[0].min(x), lo[1].min(y)];
+            hi = [hi[0].max(x), hi[1].max(y)];
+        }
+        let spread = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        if spread > 1e-3 {
+            let fill = ((hi[0] - lo[0]) / w).max((hi[1] - lo[1]) / h);
+            prop_assert!(fill > 0.85, "{fill}");
+        }
+    }
+
     /// Any mesh with any non-finite positions and scalars renders without error as long
     /// as one face is usable, and the counts match the data.
     #[test]
