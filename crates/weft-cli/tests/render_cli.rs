@@ -31,10 +31,12 @@ fn scratch(name: &str) -> PathBuf {
 
 /// A 1-D little-endian float32 `.npy` file.
 fn write_npy_f32(path: &Path, values: &[f32]) {
-    let mut header = format!(
-        "{{'descr': '<f4', 'fortran_order': False, 'shape': ({},), }}",
-        values.len()
-    );
+    write_npy_f32_shaped(path, &format!("({},)", values.len()), values);
+}
+
+/// A little-endian float32 `.npy` file of the given shape (a Python tuple).
+fn write_npy_f32_shaped(path: &Path, shape: &str, values: &[f32]) {
+    let mut header = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': {shape}, }}");
     while (10 + header.len() + 1) % 64 != 0 {
         header.push(' ');
     }

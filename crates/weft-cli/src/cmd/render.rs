@@ -412,8 +412,13 @@ fn warn_nonfinite(stats: &[MeshStats], values: Option<&Values>, frames: usize) {
             } else {
                 ""
             };
+            let (noun, verb) = if s.nonfinite_scalars == 1 {
+                ("value", "is")
+            } else {
+                ("values", "are")
+            };
             eprintln!(
-                "warning: {}: {} values{from} are not finite (NaN or infinite){scope}; drawn in magenta",
+                "warning: {}: {} {noun}{from} {verb} not finite (NaN or infinite){scope}; drawn in magenta",
                 s.name, s.nonfinite_scalars
             );
         }
