@@ -115,3 +115,30 @@ fn body_descriptor_through_the_model() {
     let s = model.body_surface(&shaped.vertices).unwrap();
     assert!(s.is_closed());
 }
+
+#[test]
+fn features_of_the_default_body() {
+    let model = weft_body::default_body().unwrap();
+    let shaped = model.shaped(&[]).unwrap();
+    let d = shaped.joint_vertex_distances().unwrap();
+    assert_eq!(
+        (d.rows(), d.cols()),
+        (model.vertex_count(), SMPL_JOINT_COUNT)
+    );
+    let surface = model.body_surface(&shaped.vertices).unwrap();
+    assert!(surface.is_closed());
+    // The joints lie inside the body.
+    let h = surface.signed_distances(&shaped.joints).unwrap();
+    for (j, h) in h.iter().enumerate() {
+        assert!(*h < 0.0, "joint {j} is {h} m outside the body");
+    }
+    // A skirt around the hips: transferred weights are proper rows.
+    let mut skirt = weft_mesh::primitives::builtin_garment();
+    skirt.positions.iter_mut().for_each(|p| p[1] += 0.1);
+    let w = model.skinning_weights().unwrap();
+    let t = weft_body::features::transfer_weights(&surface, &w, &skirt.positions).unwrap();
+    for i in 0..skirt.vertex_count() {
+        let r = t.weights.row(i);
+        assert!(r.iter().all(|&x| x >= 0.0) && (r.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+}

@@ -209,32 +209,86 @@ impl<'a> VolumetricDistance<'a> {
         Ok(m)
     }
 
-    /// `E(a, b)`: the exterior length of segment `ab` beyond the clearance allowance,
-    /// given `h(a)` and `h(b)` when known.
+    /// `E(a, b)`: the exterior length of the segment `ab` beyond the clearance
+    /// allowance (metres), as used in the route costs.
     pub fn excess_exterior_length(&self, a: [f64; 3], b: [f64; 3]) -> f64 {
         let ha = self.surface.signed_distance_unchecked(a);
         self.excess(a, ha, b, None)
     }
 
+    /// `E(a, b)` from the samples `x_k = a + (k/n)(b − a)`, `k = 0..=n`, with the
+    /// signed distances `ha = h(a)` and, when known, `hb = h(b)`.
+    ///
+    /// Samples are skipped where the answer is known without them: `h` is 1-Lipschitz,
+    /// so every sample closer to `x_k` than `|h(x_k)|` has the sign of `h(x_k)`, and an
+    /// interval between two samples of the same sign contributes all or nothing. Only
+    /// the two samples around each sign change need their values (for the linear
+    /// crossing), so the result is that of evaluating every sample, at a fraction of the
+    /// queries (about a third on a body-sized mesh).
     fn excess(&self, a: [f64; 3], ha: f64, b: [f64; 3], hb: Option<f64>) -> f64 {
         let n = self.params.samples;
         let ab = sub(b, a);
         let piece = norm_sq(ab).sqrt() / n as f64;
+        let h_at = |k: usize| match (k == n, hb) {
+            (true, Some(h)) => h,
+            _ => self
+                .surface
+                .signed_distance_unchecked(add_scaled(a, ab, k as f64 / n as f64)),
+        };
         let mut outside = 0.0;
-        let mut prev = ha;
-        let mut last = ha;
-        for k in 1..=n {
-            let h = match (k == n, hb) {
-                (true, Some(h)) => h,
-                _ => self
-                    .surface
-                    .signed_distance_unchecked(add_scaled(a, ab, k as f64 / n as f64)),
+        let (mut k, mut hk) = (0usize, ha);
+        while k < n {
+            // Samples k + 1 ..= k + sure are strictly closer than |h_k|: same sign.
+            let sure = if piece > 0.0 {
+                let reach = hk.abs() / piece * (1.0 - 1e-9);
+                if reach >= n as f64 {
+                    n
+                } else {
+                    (reach.ceil() as usize).saturating_sub(1)
+                }
+            } else {
+                n
             };
-            outside += piece * exterior_fraction(prev, h);
-            prev = h;
-            last = h;
+            let m = (k + sure + 1).min(n);
+            let hm = h_at(m);
+            let out_k = hk > 0.0;
+            if (hm > 0.0) == out_k {
+                if out_k {
+                    outside += piece * (m - k) as f64;
+                }
+            } else {
+                // The sign changes between m − 1 and m; m − 1 shares h_k's sign.
+                let h1 = if m - 1 == k { hk } else { h_at(m - 1) };
+                if out_k {
+                    outside += piece * (m - 1 - k) as f64;
+                }
+                outside += piece * exterior_fraction(h1, hm);
+            }
+            k = m;
+            hk = hm;
         }
-        let allowance = self.params.clearance_allowance * (ha.max(0.0) + last.max(0.0));
+        let allowance = self.params.clearance_allowance * (ha.max(0.0) + hk.max(0.0));
+        (outside - allowance).max(0.0)
+    }
+
+    /// [`Self::excess`] evaluating every sample: the reference the skipping is tested
+    /// against.
+    #[cfg(test)]
+    fn excess_dense(&self, a: [f64; 3], b: [f64; 3]) -> f64 {
+        let n = self.params.samples;
+        let ab = sub(b, a);
+        let piece = norm_sq(ab).sqrt() / n as f64;
+        let h: Vec<f64> = (0..=n)
+            .map(|k| {
+                self.surface
+                    .signed_distance_unchecked(add_scaled(a, ab, k as f64 / n as f64))
+            })
+            .collect();
+        let outside: f64 = h
+            .windows(2)
+            .map(|w| piece * exterior_fraction(w[0], w[1]))
+            .sum();
+        let allowance = self.params.clearance_allowance * (h[0].max(0.0) + h[n].max(0.0));
         (outside - allowance).max(0.0)
     }
 
@@ -304,6 +358,58 @@ fn exterior_fraction(a: f64, b: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn skipping_samples_changes_nothing() {
+        // A closed box with a dent-free interior: segments in, out and across it.
+        let p: Vec<[f64; 3]> = (0..8)
+            .map(|i| {
+                [
+                    (i & 1) as f64 * 0.4,
+                    ((i >> 1) & 1) as f64,
+                    ((i >> 2) & 1) as f64 * 0.3,
+                ]
+            })
+            .collect();
+        let quads: [[u32; 4]; 6] = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let f: Vec<[u32; 3]> = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        let s = BodySurface::new(&p, &f).unwrap();
+        let v = VolumetricDistance::new(
+            &s,
+            &[[0.2, 0.5, 0.15]],
+            &[None],
+            VolumetricParams {
+                clearance_allowance: 0.0,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let mut x = 0.123f64;
+        let mut next = || {
+            x = (x * 9301.0 + 0.4927).fract();
+            x * 2.0 - 0.5
+        };
+        for _ in 0..500 {
+            let a = [next(), next() + 0.3, next()];
+            let b = [next(), next() + 0.3, next()];
+            let fast = v.excess_exterior_length(a, b);
+            let dense = v.excess_dense(a, b);
+            assert!(
+                (fast - dense).abs() < 1e-12,
+                "{a:?} {b:?}: {fast} vs {dense}"
+            );
+        }
+    }
 
     #[test]
     fn exterior_fraction_is_continuous_through_the_crossing() {

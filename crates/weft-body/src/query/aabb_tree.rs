@@ -26,7 +26,11 @@
 use weft_mesh::Aabb;
 
 /// Most primitives per leaf.
-pub const LEAF_SIZE: usize = 4;
+pub const LEAF_SIZE: usize = 8;
+
+/// Traversal stack size: above the largest possible depth of a median-split tree over
+/// `u32`-indexed primitives (33), with room to spare.
+const STACK: usize = 64;
 
 /// One node: its box, and either its children (`count == 0`: children at `first` and
 /// `first + 1`) or its primitives (`order[first..first + count]`).
@@ -42,6 +46,9 @@ struct Node {
 pub struct AabbTree {
     nodes: Vec<Node>,
     order: Vec<u32>,
+    /// `leaf_boxes[k]` is the box of primitive `order[k]`: leaves test each primitive's
+    /// own box before the caller's exact (and dearer) distance.
+    leaf_boxes: Vec<Aabb>,
 }
 
 /// The empty box (contains nothing; the identity of [`union`]).
@@ -80,6 +87,7 @@ impl AabbTree {
             return AabbTree {
                 nodes: Vec::new(),
                 order,
+                leaf_boxes: Vec::new(),
             };
         }
         let centroid: Vec<[f64; 3]> = boxes
@@ -136,7 +144,11 @@ impl AabbTree {
             todo.push((left + 1, mid, hi));
             todo.push((left, lo, mid));
         }
-        let mut tree = AabbTree { nodes, order };
+        let mut tree = AabbTree {
+            nodes,
+            order,
+            leaf_boxes: Vec::new(),
+        };
         tree.refit_unchecked(boxes);
         tree
     }
@@ -154,15 +166,18 @@ impl AabbTree {
     }
 
     fn refit_unchecked(&mut self, boxes: &[Aabb]) {
+        self.leaf_boxes.clear();
+        self.leaf_boxes
+            .extend(self.order.iter().map(|&p| boxes[p as usize]));
         for i in (0..self.nodes.len()).rev() {
             let Node { first, count, .. } = self.nodes[i];
             let (first, count) = (first as usize, count as usize);
             self.nodes[i].bounds = if count == 0 {
                 union(self.nodes[first].bounds, self.nodes[first + 1].bounds)
             } else {
-                self.order[first..first + count]
+                self.leaf_boxes[first..first + count]
                     .iter()
-                    .fold(EMPTY, |acc, &p| union(acc, boxes[p as usize]))
+                    .fold(EMPTY, |acc, &b| union(acc, b))
             };
         }
     }
@@ -217,20 +232,30 @@ impl AabbTree {
         let root = self.nodes.first()?;
         let mut best: Option<(u32, f64, T)> = None;
         let mut best_sq = max_sq;
-        // (node, squared distance to its box); depth is logarithmic, so this stays small.
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        // (node, squared distance to its box). Each pop pushes at most two, so the stack
+        // never holds more than depth + 1 entries, and median splits bound the depth by
+        // ⌈log2 n⌉ + 1 ≤ 33 for u32 indices: a fixed array suffices (no allocation).
+        let mut stack = [(0u32, 0.0f64); STACK];
+        let mut top = 0usize;
         let d0 = box_distance_sq(&root.bounds, p);
         if d0 < best_sq {
-            stack.push((0, d0));
+            stack[0] = (0, d0);
+            top = 1;
         }
-        while let Some((i, d)) = stack.pop() {
+        while top > 0 {
+            top -= 1;
+            let (i, d) = stack[top];
             if d >= best_sq {
                 continue;
             }
             let node = self.nodes[i as usize];
             if node.count > 0 {
                 let (first, count) = (node.first as usize, node.count as usize);
-                for &prim in &self.order[first..first + count] {
+                for k in first..first + count {
+                    if box_distance_sq(&self.leaf_boxes[k], p) >= best_sq {
+                        continue;
+                    }
+                    let prim = self.order[k];
                     if let Some((dsq, payload)) = eval(prim, best_sq) {
                         if dsq < best_sq {
                             best_sq = dsq;
@@ -248,19 +273,21 @@ impl AabbTree {
                 } else {
                     (b, db, a, da)
                 };
-                if df < best_sq {
-                    stack.push((far, df));
+                if df < best_sq && top < STACK {
+                    stack[top] = (far, df);
+                    top += 1;
                 }
-                if dn < best_sq {
-                    stack.push((near, dn));
+                if dn < best_sq && top < STACK {
+                    stack[top] = (near, dn);
+                    top += 1;
                 }
             }
         }
         best
     }
 
-    /// Calls `visit(prim)` for every primitive whose box comes within `radius` of `p`
-    /// (box distance `<= radius`); the caller tests the primitive itself.
+    /// Calls `visit(prim)` for every primitive whose own box comes within `radius` of
+    /// `p` (box distance `<= radius`); the caller tests the primitive itself.
     pub fn for_each_near(&self, p: [f64; 3], radius: f64, mut visit: impl FnMut(u32)) {
         if self.nodes.is_empty() {
             return;
@@ -275,8 +302,10 @@ impl AabbTree {
             }
             if node.count > 0 {
                 let (first, count) = (node.first as usize, node.count as usize);
-                for &prim in &self.order[first..first + count] {
-                    visit(prim);
+                for k in first..first + count {
+                    if box_distance_sq(&self.leaf_boxes[k], p) <= r_sq {
+                        visit(self.order[k]);
+                    }
                 }
             } else {
                 stack.push(node.first + 1);

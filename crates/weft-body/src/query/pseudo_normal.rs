@@ -17,7 +17,9 @@
 //! [`weft_mesh::Topology`], because the query needs the edge of each face corner and
 //! nothing else.
 
-use super::vec3::{add, add_scaled, cross, dot, normalize_or_zero, sub};
+use rayon::prelude::*;
+
+use super::vec3::{add, add_scaled, cross, dot, norm, normalize_or_zero, sub};
 
 /// Pseudo-normals of a mesh with fixed faces; [`PseudoNormals::update`] recomputes them
 /// for new positions.
@@ -68,33 +70,47 @@ impl PseudoNormals {
     }
 
     /// Recomputes every normal for new `positions` (same length, same faces).
+    ///
+    /// The per-face work (normal and corner angles, two `atan2` per face: most of the
+    /// cost of a per-frame update) runs in parallel; the scatter onto edges and
+    /// vertices is a sequential pass in face order, so results do not depend on the
+    /// thread count.
     pub fn update(&mut self, positions: &[[f64; 3]], faces: &[[u32; 3]]) {
+        let per_face: Vec<([f64; 3], [f64; 3])> = faces
+            .par_iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|i| positions[i as usize]);
+                let (ab, ac, bc) = (sub(b, a), sub(c, a), sub(c, b));
+                let twice_area = cross(ab, ac);
+                let n = normalize_or_zero(twice_area);
+                // Corner angles as atan2(|u × v|, u · v) (no normalisation, accurate
+                // near 0 and π); the third is π minus the other two.
+                let area = norm(twice_area);
+                let alpha = area.atan2(dot(ab, ac));
+                let beta = area.atan2(-dot(ab, bc));
+                let gamma = (std::f64::consts::PI - alpha - beta).max(0.0);
+                (n, [alpha, beta, gamma])
+            })
+            .collect();
         self.face.clear();
-        self.face.extend(faces.iter().map(|f| {
-            let [a, b, c] = f.map(|i| positions[i as usize]);
-            normalize_or_zero(cross(sub(b, a), sub(c, a)))
-        }));
+        self.face.extend(per_face.iter().map(|&(n, _)| n));
         self.edge.iter_mut().for_each(|e| *e = [0.0; 3]);
         self.vertex.clear();
         self.vertex.resize(positions.len(), [0.0; 3]);
         for (fi, f) in faces.iter().enumerate() {
-            let n = self.face[fi];
+            let (n, angles) = per_face[fi];
             for k in 0..3 {
                 let e = self.face_edges[fi][k] as usize;
                 self.edge[e] = add(self.edge[e], n);
                 let v = f[k] as usize;
-                let p = positions[v];
-                let u1 = normalize_or_zero(sub(positions[f[(k + 1) % 3] as usize], p));
-                let u2 = normalize_or_zero(sub(positions[f[(k + 2) % 3] as usize], p));
-                let angle = dot(u1, u2).clamp(-1.0, 1.0).acos();
-                self.vertex[v] = add_scaled(self.vertex[v], n, angle);
+                self.vertex[v] = add_scaled(self.vertex[v], n, angles[k]);
             }
         }
         self.edge
-            .iter_mut()
+            .par_iter_mut()
             .for_each(|e| *e = normalize_or_zero(*e));
         self.vertex
-            .iter_mut()
+            .par_iter_mut()
             .for_each(|v| *v = normalize_or_zero(*v));
     }
 }
