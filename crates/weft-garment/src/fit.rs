@@ -54,7 +54,11 @@ pub struct Measurements {
     pub arm_r: [f64; 3],
     /// Lateral position of the hip joints / leg axes (m, positive).
     pub leg_x: f64,
-    /// Knee and ankle heights (m).
+    /// Lateral position of the knees and ankles (m, positive): legs may splay.
+    pub knee_x: f64,
+    /// Lateral position of the ankles (m, positive).
+    pub ankle_x: f64,
+    /// Knee height (m).
     pub knee_y: f64,
     /// Ankle height (m).
     pub ankle_y: f64,
@@ -93,6 +97,8 @@ impl Default for Measurements {
             arm_y: 0.46,
             arm_r: [0.05, 0.04, 0.03],
             leg_x: 0.095,
+            knee_x: 0.095,
+            ankle_x: 0.095,
             knee_y: -0.46,
             ankle_y: -0.85,
             leg_r: [0.08, 0.052, 0.04],
@@ -144,6 +150,18 @@ impl Measurements {
                 (self.knee_y, self.leg_r[1]),
                 (calf, self.leg_r[1]),
                 (self.ankle_y, self.leg_r[2]),
+            ],
+        )
+    }
+
+    /// Lateral position of the leg axis at height `y`: hip, knee and ankle joints.
+    pub fn leg_x_at(&self, y: f64) -> f64 {
+        piecewise(
+            y,
+            &[
+                (self.crotch_y, self.leg_x),
+                (self.knee_y, self.knee_x),
+                (self.ankle_y, self.ankle_x),
             ],
         )
     }
@@ -262,6 +280,8 @@ impl Measurements {
                 radial(wrist, 0, 1.0, 0.02).min(0.06),
             ],
             leg_x: hip[0].abs(),
+            knee_x: knee[0].abs(),
+            ankle_x: ankle[0].abs(),
             knee_y: knee[1],
             ankle_y: ankle[1],
             leg_r: [

@@ -57,6 +57,9 @@ impl FitBody {
         for p in &mut g.mesh.positions {
             *p = add(*p, self.origin);
         }
+        let before = g.mesh.positions.clone();
+        self.push_out(&mut g.mesh.positions, PUSH_OUT_MARGIN)?;
+        spread_displacements(&mut g.mesh, &before, 20);
         self.push_out(&mut g.mesh.positions, PUSH_OUT_MARGIN)?;
         Ok(g)
     }
@@ -112,5 +115,53 @@ impl FitBody {
             .map_err(|e| GarmentError::Measurements(format!("weight transfer: {e}")))?;
         garment.weights = Some(t.weights);
         Ok(())
+    }
+}
+
+/// Carries the push-out displacements to the neighbourhood of the moved vertices.
+///
+/// Moving only the vertices inside the body by a few centimetres folds their triangles
+/// over their unmoved neighbours (the garment then crosses itself). Here every vertex
+/// that was not moved takes the mean displacement of its neighbours, damped, for
+/// `rounds` rounds: a smooth, decaying bump instead of a spike. Moved vertices keep
+/// their own displacement.
+fn spread_displacements(mesh: &mut TriMesh, before: &[[f64; 3]], rounds: usize) {
+    let graph = mesh.graph();
+    let moved: Vec<bool> = mesh
+        .positions
+        .iter()
+        .zip(before)
+        .map(|(p, q)| norm(sub(*p, *q)) > 1e-12)
+        .collect();
+    let mut d: Vec<[f64; 3]> = mesh
+        .positions
+        .iter()
+        .zip(before)
+        .map(|(p, q)| sub(*p, *q))
+        .collect();
+    for _ in 0..rounds {
+        let next: Vec<[f64; 3]> = (0..d.len())
+            .map(|i| {
+                if moved[i] {
+                    return d[i];
+                }
+                let nb = graph.neighbors(i);
+                if nb.is_empty() {
+                    return d[i];
+                }
+                let sum = nb.iter().fold([0.0; 3], |s, &j| add(s, d[j as usize]));
+                let mean = scale(sum, 1.0 / nb.len() as f64);
+                // Never shrink a displacement already carried here.
+                if norm(mean) * 0.9 > norm(d[i]) {
+                    scale(mean, 0.9)
+                } else {
+                    d[i]
+                }
+            })
+            .collect();
+        d = next;
+    }
+    for ((p, q), di) in mesh.positions.iter_mut().zip(before).zip(&d) {
+        *p = add(*q, *di);
     }
 }

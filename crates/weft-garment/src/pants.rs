@@ -24,7 +24,8 @@ pub fn legs(
     let front = b.positions[bottom.idx[q] as usize];
     let back = b.positions[bottom.idx[3 * q] as usize];
     let seam_count = segments((front[2] - back[2]).abs(), h).max(2) - 1;
-    let depth = 0.02;
+    // The seam passes below the crotch (the ring sits 3 cm above it).
+    let depth = 0.045;
     let seam: Vec<u32> = (1..=seam_count)
         .map(|j| {
             let t = j as f64 / (seam_count + 1) as f64;
@@ -57,7 +58,7 @@ pub fn legs(
                 let y = top_y - d;
                 let t = (d / transition).min(1.0);
                 let smooth = t * t * (3.0 - 2.0 * t);
-                let axis_x = side * m.leg_x;
+                let axis_x = side * m.leg_x_at(y);
                 let center = lerp3([c[0], y, c[2]], [axis_x, y, 0.0], smooth);
                 // Keep both legs on their own side of the mid-plane.
                 let radius = (loop_r + (m.leg_r_at(y) + ease - loop_r) * smooth)

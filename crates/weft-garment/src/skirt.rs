@@ -37,7 +37,10 @@ pub fn body_envelope(m: &Measurements, y: f64) -> ([f64; 2], f64) {
         let r = m.leg_r_at(y);
         let s = m.torso_at(m.crotch_y);
         (
-            [(m.leg_x + r).max(s.half_x * 0.8), r.max(s.half_z * 0.8)],
+            [
+                (m.leg_x_at(y) + r).max(s.half_x * 0.8),
+                r.max(s.half_z * 0.8),
+            ],
             0.0,
         )
     }

@@ -70,12 +70,18 @@ pub fn shoulders(
                     let p = pos(b, i);
                     let q = pos(b, n - i);
                     let mid = lerp3(p, q, 0.5);
-                    let apex = [p[0], top_y(p[0]), mid[2]];
-                    // Quadratic Bézier through `apex` at t = 1/2.
-                    let c = add(scale(apex, 2.0), scale(mid, -1.0));
-                    let a = lerp3(p, c, t);
-                    let bb = lerp3(c, q, t);
-                    lerp3(a, bb, t)
+                    // A superellipse arc (exponent 3) from the front over `top_y` to
+                    // the back: boxier than a parabola, so it clears the chest and
+                    // shoulder-blade corners of the shoulder's cross section.
+                    let theta = std::f64::consts::PI * t;
+                    let boxy = |c: f64| c.signum() * c.abs().powf(2.0 / 3.0);
+                    let half_depth = 0.5 * (p[2] - q[2]);
+                    let height = (top_y(p[0]) - mid[1]).max(0.0);
+                    [
+                        p[0] + (q[0] - p[0]) * t,
+                        mid[1] + height * boxy(theta.sin()),
+                        mid[2] + half_depth * boxy(theta.cos()),
+                    ]
                 })
                 .collect();
             rows.push(pts.iter().map(|&p| b.vertex(p)).collect());
