@@ -5,9 +5,9 @@
 //!
 //! A geometry crate: no learning dependency, so it builds and tests in seconds.
 
-pub mod features;
 pub mod default_body;
 pub mod error;
+pub mod features;
 pub mod joints;
 pub mod kinematics;
 pub mod model;

@@ -221,7 +221,7 @@ fn bad_inputs_are_one_line_errors() {
         (vec![s(&dir.join("missing.obj")).into()], "missing.obj"),
         (
             vec![s(&g).into(), "--color-by".into(), s(&g).into()],
-            "not a usable .npy array",
+            "not a .npy file",
         ),
         (
             vec![s(&g).into(), "--range".into(), "5:1".into()],

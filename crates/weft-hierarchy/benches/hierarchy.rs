@@ -13,7 +13,10 @@ fn shapes() -> Vec<(String, TriMesh)> {
     }
     // 100 vertices around, as the built-in garment, growing in length.
     for rings in [100, 1000, 10000] {
-        out.push((format!("cylinder {rings}x100"), cylinder(rings, 100, 0.3, 0.01)));
+        out.push((
+            format!("cylinder {rings}x100"),
+            cylinder(rings, 100, 0.3, 0.01),
+        ));
     }
     out
 }

@@ -5,6 +5,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use weft_mesh::export::npy::NpyData;
 use weft_mesh::io::load_mesh;
 use weft_mesh::TriMesh;
 use weft_render::{
@@ -357,7 +358,7 @@ fn natural_key(p: &Path) -> Vec<(u8, String)> {
 
 /// Reads --color-by and checks its shape against the frames.
 fn read_values(path: &Path, frame_paths: &[PathBuf], frames: &[TriMesh]) -> Result<Values> {
-    let (shape, data) = npy::read(path)?;
+    let (shape, data) = read_npy_floats(path)?;
     let first = &frame_paths[0];
     let n = frames[0].vertex_count();
     let rows: Vec<Vec<f64>> = match shape.as_slice() {
@@ -437,152 +438,19 @@ fn warn_nonfinite(stats: &[MeshStats], values: Option<&Values>, frames: usize) {
     }
 }
 
-/// A minimal private reader of 1-D and 2-D little-endian f32/f64 `.npy` arrays.
-///
-/// weft-mesh is getting a full `.npy` reader (`weft_mesh::export::npy`); this one exists
-/// so `weft render` does not wait for it, and should be replaced by it once it lands.
-mod npy {
-    use anyhow::{bail, Context, Result};
-    use std::path::Path;
-
-    /// Shape and values (as f64) of the array in `path`.
-    pub(super) fn read(path: &Path) -> Result<(Vec<usize>, Vec<f64>)> {
-        let bytes =
-            std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
-        parse(&bytes).with_context(|| format!("{}: not a usable .npy array", path.display()))
-    }
-
-    pub(super) fn parse(bytes: &[u8]) -> Result<(Vec<usize>, Vec<f64>)> {
-        if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
-            bail!("no .npy magic string at the start");
-        }
-        let (header_len, start) = match bytes[6] {
-            1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
-            2 | 3 if bytes.len() >= 12 => {
-                let n = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
-                (usize::try_from(n)?, 12)
-            }
-            v => bail!("unsupported .npy version {v}; expected 1, 2 or 3"),
-        };
-        let header = bytes
-            .get(start..start + header_len)
-            .context("the header is cut short")?;
-        let header = std::str::from_utf8(header).context("the header is not text")?;
-        let descr = field(header, "descr").context("the header has no 'descr'")?;
-        let width = match descr.trim_matches(|c| c == '\'' || c == '"') {
-            "<f4" => 4,
-            "<f8" => 8,
-            other => bail!(
-                "element type {other}; expected little-endian float32 or float64 ('<f4' or '<f8')"
-            ),
-        };
-        let fortran =
-            field(header, "fortran_order").context("the header has no 'fortran_order'")?;
-        if fortran.trim() != "False" {
-            bail!("Fortran-ordered data; expected C order");
-        }
-        let shape_text = field(header, "shape").context("the header has no 'shape'")?;
-        let shape = shape_text
-            .trim()
-            .trim_start_matches('(')
-            .trim_end_matches(')')
-            .split(',')
-            .map(str::trim)
-            .filter(|s| !s.is_empty())
-            .map(|s| {
-                s.parse::<usize>()
-                    .with_context(|| format!("shape entry `{s}` is not a size"))
-            })
-            .collect::<Result<Vec<usize>>>()?;
-        let count = shape
-            .iter()
-            .try_fold(1usize, |a, &b| a.checked_mul(b))
-            .context("the shape is too large")?;
-        let data = &bytes[start + header_len..];
-        if Some(data.len()) != count.checked_mul(width) {
-            bail!(
-                "{} data bytes for shape {shape:?} of {width}-byte floats; expected {}",
-                data.len(),
-                count.saturating_mul(width)
-            );
-        }
-        let values = if width == 4 {
-            data.chunks_exact(4)
-                .map(|c| f64::from(f32::from_le_bytes([c[0], c[1], c[2], c[3]])))
-                .collect()
-        } else {
-            data.chunks_exact(8)
-                .map(|c| f64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]))
-                .collect()
-        };
-        Ok((shape, values))
-    }
-
-    /// The text of `key`'s value in the header dict, up to the next top-level comma.
-    fn field<'a>(header: &'a str, key: &str) -> Option<&'a str> {
-        let at = header
-            .find(&format!("'{key}'"))
-            .or_else(|| header.find(&format!("\"{key}\"")))?;
-        let rest = &header[at + key.len() + 2..];
-        let rest = rest.trim_start().strip_prefix(':')?.trim_start();
-        let mut depth = 0;
-        for (i, c) in rest.char_indices() {
-            match c {
-                '(' => depth += 1,
-                ')' => depth -= 1,
-                ',' | '}' if depth == 0 => return Some(&rest[..i]),
-                _ => {}
-            }
-        }
-        None
-    }
-
-    #[cfg(test)]
-    mod tests {
-        use super::*;
-
-        fn npy(descr: &str, shape: &str, data: &[u8]) -> Vec<u8> {
-            let mut h =
-                format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
-            while (10 + h.len() + 1) % 64 != 0 {
-                h.push(' ');
-            }
-            h.push('\n');
-            let mut b = b"\x93NUMPY\x01\x00".to_vec();
-            b.extend_from_slice(&(h.len() as u16).to_le_bytes());
-            b.extend_from_slice(h.as_bytes());
-            b.extend_from_slice(data);
-            b
-        }
-
-        #[test]
-        fn reads_f4_and_f8_in_one_and_two_dimensions() {
-            let d: Vec<u8> = [1.5f32, -2.0, f32::NAN]
-                .iter()
-                .flat_map(|v| v.to_le_bytes())
-                .collect();
-            let (s, v) = parse(&npy("<f4", "(3,)", &d)).unwrap();
-            assert_eq!(s, vec![3]);
-            assert_eq!(&v[..2], &[1.5, -2.0]);
-            assert!(v[2].is_nan());
-            let d: Vec<u8> = [1.0f64, 2.0, 3.0, 4.0]
-                .iter()
-                .flat_map(|v| v.to_le_bytes())
-                .collect();
-            let (s, v) = parse(&npy("<f8", "(2, 2)", &d)).unwrap();
-            assert_eq!((s, v), (vec![2, 2], vec![1.0, 2.0, 3.0, 4.0]));
-        }
-
-        #[test]
-        fn rejects_what_it_cannot_read() {
-            assert!(parse(b"not an npy").is_err());
-            let e = parse(&npy("<i4", "(1,)", &[0; 4])).unwrap_err();
-            assert!(format!("{e:#}").contains("'<f4' or '<f8'"), "{e:#}");
-            let e = parse(&npy("<f4", "(3,)", &[0; 8])).unwrap_err();
-            assert!(format!("{e:#}").contains("8 data bytes"), "{e:#}");
-            assert!(parse(&npy(">f4", "(1,)", &[0; 4])).is_err());
-        }
-    }
+/// Shape and values (as f64) of the f32 or f64 `.npy` array in `path`.
+fn read_npy_floats(path: &Path) -> Result<(Vec<usize>, Vec<f64>)> {
+    let array = weft_mesh::export::npy::read_npy(path)?;
+    let values = match array.data {
+        NpyData::F32(v) => v.into_iter().map(f64::from).collect(),
+        NpyData::F64(v) => v,
+        other => bail!(
+            "{}: elements of type {}; expected float32 or float64 values",
+            path.display(),
+            other.descr()
+        ),
+    };
+    Ok((array.shape, values))
 }
 
 #[cfg(test)]
