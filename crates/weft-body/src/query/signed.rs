@@ -2,7 +2,7 @@
 //!
 //! The sign is that of `(p − c) · n`, `c` the closest surface point and `n` the
 //! angle-weighted pseudo-normal of the feature (vertex, edge or face) `c` lies on
-//! (Bærentzen & Aanæs 2005, see [`super::pseudo_normal`]). Unlike ray parity or the
+//! (Bærentzen & Aanæs 2005; docs/body-features.md). Unlike ray parity or the
 //! normal of the nearest face, this is exact for every point when the surface is a
 //! closed, outward-oriented 2-manifold, including points whose closest point is a sharp
 //! edge or vertex; on an open or inconsistently oriented mesh it degrades gracefully to
