@@ -249,6 +249,9 @@ fn without(
     arrays
 }
 
+/// Named arrays of an .npz under test: (key, shape, values).
+type Arrays = Vec<(&'static str, Vec<usize>, Vec<f64>)>;
+
 #[test]
 fn malformed_npz_corpus_gives_one_line_errors_naming_file_and_key() {
     let dir = TempDir::new("corpus");
@@ -256,7 +259,7 @@ fn malformed_npz_corpus_gives_one_line_errors_naming_file_and_key() {
     nan_poses[2 * 72 + 7] = f64::NAN;
     let mut inf_trans = vec![0.0; 15];
     inf_trans[4] = f64::INFINITY;
-    let cases: Vec<(&str, Vec<(&str, Vec<usize>, Vec<f64>)>, &str)> = vec![
+    let cases: Vec<(&str, Arrays, &str)> = vec![
         ("poses-wrong-width", with(good(5), "poses", vec![5, 50], vec![0.0; 250]), "`poses`: has shape (5, 50); expected (N, 72) for SMPL, (N, 156) for SMPL-H or (N, 165) for SMPL-X"),
         ("poses-3d", with(good(5), "poses", vec![5, 24, 3], vec![0.0; 360]), "`poses`: has shape [5, 24, 3]; expected (N, 72)"),
         ("poses-empty", with(with(good(5), "poses", vec![0, 72], vec![]), "trans", vec![0, 3], vec![]), "`poses`: has no frames"),
