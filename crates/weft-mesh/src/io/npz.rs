@@ -422,7 +422,7 @@ impl NpzWriter {
                 format!("`{key}` added twice"),
             ));
         }
-        let mut bytes = npy_header(T::DESCR, shape);
+        let mut bytes = crate::export::npy::npy_header(T::DESCR, shape);
         bytes.reserve(std::mem::size_of_val(data));
         for &x in data {
             x.put(&mut bytes);
@@ -464,35 +464,6 @@ impl NpzWriter {
         let bytes = self.to_bytes().map_err(io_err)?;
         write_atomic(path, |w| w.write_all(&bytes)).map_err(io_err)
     }
-}
-
-/// The `.npy` preamble and header for `descr` and `shape`, padded so the data starts at
-/// a multiple of 64 bytes, as NumPy writes it.
-fn npy_header(descr: &str, shape: &[usize]) -> Vec<u8> {
-    let shape_text = match shape {
-        [n] => format!("({n},)"),
-        _ => format!(
-            "({})",
-            shape
-                .iter()
-                .map(ToString::to_string)
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    };
-    let mut dict =
-        format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape_text}, }}");
-    let total = (10 + dict.len() + 1).div_ceil(64) * 64;
-    while 10 + dict.len() + 1 < total {
-        dict.push(' ');
-    }
-    dict.push('\n');
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"\x93NUMPY\x01\x00");
-    // A header of a few dozen shape entries stays far below u16::MAX.
-    out.extend_from_slice(&u16::try_from(dict.len()).unwrap_or(u16::MAX).to_le_bytes());
-    out.extend_from_slice(dict.as_bytes());
-    out
 }
 
 /// Element types of `.npy` members weft reads.
