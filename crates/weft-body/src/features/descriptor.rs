@@ -39,22 +39,11 @@ pub type Rotation = [[f64; 3]; 3];
 /// The identity rotation.
 pub const IDENTITY: Rotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
-/// `Z(ω)` of eq. 3.8 (Rodrigues' formula) for an axis-angle vector `ω` (radians).
-/// Below `1e-12` rad the first-order form `I + [ω]×` is used (exact to rounding there
-/// and free of the division by `‖ω‖`).
+/// `Z(ω)` of eq. 3.8 (Rodrigues' formula) for an axis-angle vector `ω` (radians), as a
+/// row-major array: [`crate::rotation::rodrigues`], in this module's matrix type.
 pub fn rodrigues(omega: [f64; 3]) -> Rotation {
-    let theta = (omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2]).sqrt();
-    let skew = |k: [f64; 3]| [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]];
-    if theta < 1e-12 {
-        let s = skew(omega);
-        return std::array::from_fn(|i| std::array::from_fn(|j| IDENTITY[i][j] + s[i][j]));
-    }
-    let k = skew(omega.map(|x| x / theta));
-    let k2 = mul(k, k);
-    let (s, c) = theta.sin_cos();
-    std::array::from_fn(|i| {
-        std::array::from_fn(|j| IDENTITY[i][j] + s * k[i][j] + (1.0 - c) * k2[i][j])
-    })
+    let m = crate::rotation::rodrigues(omega);
+    std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
 }
 
 /// `a · b`.
