@@ -15,8 +15,8 @@ use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 use crate::graph::Graph;
-use crate::math::{norm, sub};
 use crate::mesh::TriMesh;
+use crate::vec3::{norm, sub};
 
 /// Why a [`Geodesics`] could not be built from a mesh or graph.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -10,12 +10,12 @@ pub mod export;
 pub mod geodesic;
 pub mod graph;
 pub mod io;
-mod math;
 pub mod mesh;
 pub mod nystrom;
 pub mod primitives;
 pub mod topology;
 pub mod validate;
+pub mod vec3;
 
 pub use error::MeshError;
 pub use geodesic::{GeodesicError, Geodesics};

@@ -2,7 +2,7 @@
 //! system needs (areas, normals, bounding box, unique edges, the vertex graph).
 
 use crate::graph::Graph;
-use crate::math::{add, cross, norm, normalize_or_zero, sub};
+use crate::vec3::{add, cross, norm, normalize_or_zero, sub};
 
 /// A triangle mesh in metres, right-handed, Y up.
 ///

@@ -11,8 +11,8 @@ use std::fmt;
 use std::path::Path;
 
 use crate::error::MeshError;
-use crate::math::{cross, dot, sub};
 use crate::mesh::TriMesh;
+use crate::vec3::{cross, dot, sub};
 
 /// A face is degenerate when its area is at most this fraction of the squared bounding-box
 /// diagonal (or when it repeats a vertex).

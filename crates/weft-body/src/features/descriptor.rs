@@ -31,7 +31,7 @@ use rayon::prelude::*;
 use super::distances::check_points;
 use super::error::FeatureError;
 use super::weights::SkinningWeights;
-use crate::query::vec3::is_finite;
+use weft_mesh::vec3::is_finite;
 
 /// A 3×3 rotation matrix, row-major (`m[row][col]`).
 pub type Rotation = [[f64; 3]; 3];

@@ -39,8 +39,8 @@ use weft_mesh::{Graph, TriMesh};
 use super::error::FeatureError;
 use super::transfer::{transfer_weights, Transfer};
 use super::weights::SkinningWeights;
-use crate::query::vec3::dist;
 use crate::query::BodySurface;
+use weft_mesh::vec3::dist;
 
 /// Parameters of [`diffuse_weights`]; the defaults suit skirts and dresses on an adult
 /// body in metres.

@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use super::error::FeatureError;
 use super::matrix::FeatureMatrix;
-use crate::query::vec3::{dist, is_finite};
+use weft_mesh::vec3::{dist, is_finite};
 
 /// Fails with the index of the first non-finite point.
 pub(crate) fn check_points(points: &[[f64; 3]], what: &'static str) -> Result<(), FeatureError> {

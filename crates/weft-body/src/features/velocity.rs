@@ -18,7 +18,7 @@
 
 use super::distances::check_points;
 use super::error::FeatureError;
-use crate::query::vec3::{scale, sub};
+use weft_mesh::vec3::{scale, sub};
 
 /// Body-vertex velocities over `m` frames.
 #[derive(Clone, Debug, PartialEq)]

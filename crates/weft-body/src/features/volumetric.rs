@@ -52,8 +52,8 @@ use super::descriptor::check_parents;
 use super::distances::check_points;
 use super::error::FeatureError;
 use super::matrix::FeatureMatrix;
-use crate::query::vec3::{add_scaled, dist, dot, is_finite, norm_sq, sub};
 use crate::query::BodySurface;
+use weft_mesh::vec3::{add_scaled, dist, dot, is_finite, norm_sq, sub};
 
 /// Parameters of [`VolumetricDistance`].
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use super::error::QueryError;
 use super::surface::{check_finite, BodySurface};
 use super::triangle::{closest_point_on_triangle, LocalFeature};
-use super::vec3::{add_scaled, dot, is_finite, normalize_or_zero, sub};
+use weft_mesh::vec3::{add_scaled, dot, is_finite, normalize_or_zero, sub};
 
 /// The mesh feature a closest point lies on, in the surface's own vertex and face
 /// indices.

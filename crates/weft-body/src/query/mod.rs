@@ -24,7 +24,6 @@ pub mod radius;
 pub mod signed;
 pub mod surface;
 pub mod triangle;
-pub(crate) mod vec3;
 
 pub use aabb_tree::AabbTree;
 pub use closest::{ClosestPoint, SurfaceFeature};

@@ -19,7 +19,7 @@
 
 use rayon::prelude::*;
 
-use super::vec3::{add, add_scaled, cross, dot, norm, normalize_or_zero, sub};
+use weft_mesh::vec3::{add, add_scaled, cross, dot, norm, normalize_or_zero, sub};
 
 /// Pseudo-normals of a mesh with fixed faces; [`PseudoNormals::update`] recomputes them
 /// for new positions.

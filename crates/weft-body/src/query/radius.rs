@@ -12,7 +12,7 @@ use weft_mesh::Aabb;
 use super::aabb_tree::AabbTree;
 use super::error::QueryError;
 use super::surface::check_finite;
-use super::vec3::{dist, is_finite, norm_sq, sub};
+use weft_mesh::vec3::{dist, is_finite, norm_sq, sub};
 
 /// A point set (the body's vertices) with its AABB tree.
 #[derive(Clone, Debug, PartialEq)]

@@ -7,7 +7,7 @@ use weft_mesh::{Aabb, TriMesh};
 use super::aabb_tree::AabbTree;
 use super::error::QueryError;
 use super::pseudo_normal::PseudoNormals;
-use super::vec3::is_finite;
+use weft_mesh::vec3::is_finite;
 
 /// A triangle surface prepared for queries.
 ///

@@ -8,7 +8,7 @@
 //! fallback to the three edges for degenerate (zero-area) triangles, which that test
 //! divides by.
 
-use super::vec3::{add_scaled, dot, norm_sq, sub};
+use weft_mesh::vec3::{add_scaled, dot, norm_sq, sub};
 
 /// Barycentric coordinates at or below this are snapped to zero when naming the feature,
 /// so that a closest point that is on an edge up to rounding is reported on the edge.

@@ -519,7 +519,7 @@ fn write_vec3s(w: &mut dyn Write, v: impl Iterator<Item = [f32; 3]>) -> io::Resu
 /// A vertex without a usable normal (isolated, or only degenerate faces) gets +Y: glTF
 /// requires unit normals, and +Y is the neutral choice for a Y-up scene.
 fn vertex_normals(positions: &[[f32; 3]], faces: &[[u32; 3]]) -> Vec<[f32; 3]> {
-    use crate::math::{add, cross, norm, sub};
+    use crate::vec3::{add, cross, norm, sub};
     let p = |i: u32| positions[i as usize].map(f64::from);
     let mut acc = vec![[0.0f64; 3]; positions.len()];
     for f in faces {
