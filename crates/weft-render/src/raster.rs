@@ -182,7 +182,7 @@ mod tests {
 
     proptest::proptest! {
         /// A jittered grid of triangles tiling a square covers every pixel centre inside
-        /// the square exactly once, whatever the jitter.
+        /// the square exactly once, whatever the jitter that keeps it a tiling.
         #[test]
         fn a_triangulated_square_covers_each_pixel_exactly_once(
             jitter in proptest::collection::vec((-0.3f64..0.3, -0.3f64..0.3), 25),
@@ -199,17 +199,24 @@ mod tests {
                 }
                 [x, y, 1.0]
             };
-            let mut hits = vec![0u32; 32 * 32];
+            // The property is about tilings: jitter that folds a triangle over its
+            // neighbour (possible once two vertices move more than a quarter cell towards
+            // each other) makes the triangles overlap, so such draws are skipped.
+            let signed_area = |[a, b, c]: [[f64; 3]; 3]| (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+            let mut triangles = Vec::new();
             for j in 0..n {
                 for i in 0..n {
                     let (a, b, c, d) = (vertex(i, j), vertex(i + 1, j), vertex(i + 1, j + 1), vertex(i, j + 1));
-                    for tri in [[a, b, c], [a, c, d]] {
-                        let mut t = Target::new(32, 32, [0; 3]);
-                        t.triangle(tri, |_| [1, 1, 1]);
-                        for (h, c) in hits.iter_mut().zip(&t.color) {
-                            *h += u32::from(*c == [1, 1, 1]);
-                        }
-                    }
+                    triangles.extend([[a, b, c], [a, c, d]]);
+                }
+            }
+            proptest::prop_assume!(triangles.iter().all(|&t| signed_area(t) > 0.0));
+            let mut hits = vec![0u32; 32 * 32];
+            for tri in triangles {
+                let mut t = Target::new(32, 32, [0; 3]);
+                t.triangle(tri, |_| [1, 1, 1]);
+                for (h, c) in hits.iter_mut().zip(&t.color) {
+                    *h += u32::from(*c == [1, 1, 1]);
                 }
             }
             for y in 0..32 {
