@@ -11,29 +11,8 @@ use weft_body::motion::{
 };
 use weft_mesh::io::npz::NpzWriter;
 
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(tag: &str) -> Self {
-        use std::sync::atomic::{AtomicU64, Ordering};
-        static N: AtomicU64 = AtomicU64::new(0);
-        let n = N.fetch_add(1, Ordering::Relaxed);
-        let dir =
-            std::env::temp_dir().join(format!("weft-motion-npz-{tag}-{}-{n}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-    fn path(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+mod motion_common;
+use motion_common::TempDir;
 
 fn dance(frames: usize) -> Motion {
     let mut p = ProceduralParams::new(MotionKind::Dance);
@@ -47,7 +26,7 @@ fn dance(frames: usize) -> Motion {
 
 #[test]
 fn npz_round_trip_is_exact_to_storage_precision() {
-    let dir = TempDir::new("roundtrip");
+    let dir = TempDir::new("npz", "roundtrip");
     let m = dance(30);
     for up in [UpAxis::Z, UpAxis::Y] {
         let options = AmassOptions {
@@ -83,7 +62,7 @@ fn z_up_files_are_turned_y_up_about_the_rest_pelvis() {
     // One frame, written by hand the way AMASS stores it: the body stands upright in a
     // Z-up world, so its root orientation is +90° about X, and the pelvis is 0.95 m
     // above the floor.
-    let dir = TempDir::new("zup");
+    let dir = TempDir::new("npz", "zup");
     let path = dir.path("amass.npz");
     let j0 = DEFAULT_REST_JOINTS[0];
     let mut poses = vec![0.0f64; 156];
@@ -160,7 +139,7 @@ fn z_up_files_are_turned_y_up_about_the_rest_pelvis() {
 
 #[test]
 fn smplx_and_split_layouts_read() {
-    let dir = TempDir::new("layouts");
+    let dir = TempDir::new("npz", "layouts");
     let n = 4;
     let mut poses = vec![0.0f64; n * 165];
     for t in 0..n {
@@ -254,7 +233,7 @@ type Arrays = Vec<(&'static str, Vec<usize>, Vec<f64>)>;
 
 #[test]
 fn malformed_npz_corpus_gives_one_line_errors_naming_file_and_key() {
-    let dir = TempDir::new("corpus");
+    let dir = TempDir::new("npz", "corpus");
     let mut nan_poses = vec![0.0; 5 * 72];
     nan_poses[2 * 72 + 7] = f64::NAN;
     let mut inf_trans = vec![0.0; 15];
@@ -314,7 +293,7 @@ fn crc32(bytes: &[u8]) -> u32 {
 fn an_absurd_frame_count_in_the_header_is_refused_without_allocating() {
     // A stored archive whose `poses` header claims 10¹⁵ frames over 5 frames of data:
     // the reader must compare the claim with the bytes present, not allocate for it.
-    let dir = TempDir::new("absurd");
+    let dir = TempDir::new("npz", "absurd");
     let mut w = NpzWriter::new(false);
     w.add("poses", &[5, 72], &vec![0.0f64; 360]).unwrap();
     w.add("trans", &[5, 3], &[0.0f64; 15]).unwrap();
@@ -370,7 +349,7 @@ fn an_absurd_frame_count_in_the_header_is_refused_without_allocating() {
 fn the_writer_stores_amass_keys_and_dtypes() {
     let m = dance(3);
     let w = amass_npz(&m, &AmassOptions::default()).unwrap();
-    let dir = TempDir::new("keys");
+    let dir = TempDir::new("npz", "keys");
     let path = dir.path("k.npz");
     w.write(&path).unwrap();
     let mut npz = weft_mesh::io::npz::Npz::open(&path).unwrap();

@@ -18,29 +18,8 @@ fn fixture(name: &str) -> PathBuf {
 }
 
 /// A fresh directory under the system temp dir, removed on drop.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(tag: &str) -> Self {
-        use std::sync::atomic::{AtomicU64, Ordering};
-        static N: AtomicU64 = AtomicU64::new(0);
-        let n = N.fetch_add(1, Ordering::Relaxed);
-        let dir =
-            std::env::temp_dir().join(format!("weft-motion-bvh-{tag}-{}-{n}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-    fn path(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+mod motion_common;
+use motion_common::TempDir;
 
 fn walk(frames: usize) -> Motion {
     let mut p = ProceduralParams::new(MotionKind::Walk);
@@ -51,7 +30,7 @@ fn walk(frames: usize) -> Motion {
 
 #[test]
 fn motion_to_bvh_and_back_is_the_same_motion() {
-    let dir = TempDir::new("roundtrip");
+    let dir = TempDir::new("bvh", "roundtrip");
     for kind in MotionKind::ALL {
         let mut p = ProceduralParams::new(kind);
         p.frames = 40;
@@ -106,7 +85,7 @@ fn cmu_fixture_round_trips_through_smpl_bvh() {
         report.root_scale
     );
 
-    let dir = TempDir::new("cmu");
+    let dir = TempDir::new("bvh", "cmu");
     let out = dir.path("smpl.bvh");
     write_bvh(&out, &m1, &DEFAULT_REST_JOINTS).unwrap();
     let (m2, _) = read_motion(&out, &MotionFileOptions::default()).unwrap();
@@ -348,7 +327,7 @@ fn z_up_files_and_explicit_scales_are_converted() {
 
 #[test]
 fn user_name_maps_in_toml_and_json() {
-    let dir = TempDir::new("maps");
+    let dir = TempDir::new("bvh", "maps");
     // The SMPL BVH with renamed joints.
     let m = walk(10);
     let b = motion_to_bvh(&m, &DEFAULT_REST_JOINTS).unwrap();
@@ -514,7 +493,7 @@ fn mapping_against_the_hierarchy_is_warned_about() {
 #[test]
 fn malformed_bvh_corpus_gives_one_line_errors() {
     let good = std::fs::read_to_string(fixture("cmu_tiny.bvh")).unwrap();
-    let dir = TempDir::new("corpus");
+    let dir = TempDir::new("bvh", "corpus");
     let cases: Vec<(&str, String, &str)> = vec![
         (
             "truncated-hierarchy",
