@@ -99,6 +99,17 @@ impl FitBody {
         model: &BodyModel,
         garment: &mut Garment,
     ) -> Result<(), GarmentError> {
+        garment.weights = Some(self.weights_at(model, &garment.mesh.positions)?);
+        Ok(())
+    }
+
+    /// `model`'s skinning weights at `points` (any garment on this body, e.g. one read
+    /// from an OBJ file): closest body surface point, barycentric.
+    pub fn weights_at(
+        &self,
+        model: &BodyModel,
+        points: &[[f64; 3]],
+    ) -> Result<SkinningWeights, GarmentError> {
         let w = model.weights();
         let (n, s) = (w.vertex_count(), w.joint_count());
         let mut dense = vec![0.0; n * s];
@@ -111,10 +122,9 @@ impl FitBody {
         }
         let body_weights = SkinningWeights::new(dense, s)
             .map_err(|e| GarmentError::Measurements(format!("body skinning weights: {e}")))?;
-        let t = transfer_weights(&self.surface, &body_weights, &garment.mesh.positions)
+        let t = transfer_weights(&self.surface, &body_weights, points)
             .map_err(|e| GarmentError::Measurements(format!("weight transfer: {e}")))?;
-        garment.weights = Some(t.weights);
-        Ok(())
+        Ok(t.weights)
     }
 }
 
@@ -125,7 +135,7 @@ impl FitBody {
 /// that was not moved takes the mean displacement of its neighbours, damped, for
 /// `rounds` rounds: a smooth, decaying bump instead of a spike. Moved vertices keep
 /// their own displacement.
-fn spread_displacements(mesh: &mut TriMesh, before: &[[f64; 3]], rounds: usize) {
+pub(crate) fn spread_displacements(mesh: &mut TriMesh, before: &[[f64; 3]], rounds: usize) {
     let graph = mesh.graph();
     let moved: Vec<bool> = mesh
         .positions
