@@ -1,5 +1,14 @@
 //! Evaluation for weft (seed 000 §4): how far a model's garments are from the simulated
 //! ground truth, compared with the no-learning LBS baseline and with the other pooling
 //! variants of Table 1, and why a vertex moves the way it does (attribution, §4.1).
+//!
+//! - [`metrics`]: `E_verts` (mm), `E_norm` (°), collision rate, edge strain.
+//! - [`stats`]: mean ± std in one pass.
 
+pub mod error;
+pub mod metrics;
 pub mod stats;
+
+pub use error::EvalError;
+pub use metrics::{FrameMetrics, GarmentTopology, MetricsSummary};
+pub use stats::{Accumulator, Summary};

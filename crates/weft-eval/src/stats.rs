@@ -114,10 +114,7 @@ impl Summary {
         if self.count == 0 {
             return "–".to_owned();
         }
-        format!(
-            "{:.*} (± {:.*})",
-            digits, self.mean, digits, self.std
-        )
+        format!("{:.*} (± {:.*})", digits, self.mean, digits, self.std)
     }
 }
 
