@@ -1,0 +1,71 @@
+//! Typed errors of the models: every input a user controls (a garment, a body, a motion, a
+//! config file, a checkpoint) is checked at the API boundary and a mismatch is reported by
+//! name, with the expected and the found value.
+
+use std::path::PathBuf;
+
+/// What can go wrong building inputs, running or loading a model.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    /// An input's size disagrees with the configuration or with another input.
+    #[error("{what}: expected {expected}, found {found}")]
+    Mismatch {
+        /// Which input or quantity.
+        what: String,
+        /// What the configuration (or the other input) requires.
+        expected: String,
+        /// What was given.
+        found: String,
+    },
+    /// A NaN or infinite number in an input.
+    #[error("{what} holds a non-finite value at index {index}")]
+    NonFinite {
+        /// Which input.
+        what: &'static str,
+        /// Flat index of the first bad value.
+        index: usize,
+    },
+    /// A configuration value that cannot build the model.
+    #[error("invalid model configuration: {0}")]
+    Config(String),
+    /// A garment that the model cannot run on (too small to pool, no faces, ...).
+    #[error("garment: {0}")]
+    Garment(String),
+    /// Body model, feature or motion computations failed.
+    #[error("body: {0}")]
+    Body(String),
+    /// A layer refused its input.
+    #[error(transparent)]
+    Nn(#[from] weft_nn::NnError),
+    /// A run directory or checkpoint could not be read.
+    #[error("{path}: {message}")]
+    Run {
+        /// The file or directory.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
+}
+
+impl ModelError {
+    /// A [`ModelError::Mismatch`] from displayable values.
+    pub fn mismatch(
+        what: impl Into<String>,
+        expected: impl std::fmt::Display,
+        found: impl std::fmt::Display,
+    ) -> Self {
+        ModelError::Mismatch {
+            what: what.into(),
+            expected: expected.to_string(),
+            found: found.to_string(),
+        }
+    }
+}
+
+/// Fails with [`ModelError::NonFinite`] at the first non-finite value.
+pub(crate) fn check_finite(what: &'static str, values: &[f32]) -> Result<(), ModelError> {
+    match values.iter().position(|x| !x.is_finite()) {
+        Some(index) => Err(ModelError::NonFinite { what, index }),
+        None => Ok(()),
+    }
+}
