@@ -7,6 +7,8 @@
 
 pub mod physics;
 pub mod supervised;
+#[cfg(test)]
+mod tests;
 
 use std::sync::Arc;
 
@@ -210,7 +212,11 @@ pub fn collision_energies<P: BodyProximity + Sync>(
 
 /// Eq. 5 over `frames` frames: lumped masses of the rest garment at the configured
 /// density, weft's Y-up gravity.
-pub fn gravity_energy(rest: &TriMesh, frames: usize, weights: &TermWeights) -> Result<FrameEnergies> {
+pub fn gravity_energy(
+    rest: &TriMesh,
+    frames: usize,
+    weights: &TermWeights,
+) -> Result<FrameEnergies> {
     let masses = lumped_masses(rest, &vec![weights.density; rest.face_count()])?;
     let g = Gravity::new(masses, weft_sim::STANDARD_GRAVITY)?;
     FrameEnergies::shared(Arc::new(g), frames)

@@ -101,6 +101,11 @@ impl FrameEnergies {
         self.vertex_count
     }
 
+    /// The energy of frame `t`.
+    pub fn frame(&self, t: usize) -> Option<&Arc<dyn Energy + Send + Sync>> {
+        self.frames.get(t)
+    }
+
     /// `(1/T) Σ_t E_t(x_t)` for `x` holding `T·N` positions, frame-major.
     pub fn value(&self, x: &[[f64; 3]]) -> Result<f64> {
         self.check(x.len())?;
@@ -293,10 +298,9 @@ pub fn physics_loss(
         && matches!(dtype, DType::F32 | DType::F64)
         && weft_nn::backend::is_flex(&x.device())
     {
-        return Ok(Tensor::from_dispatch(<Dispatch as EnergyOps>::energy_value(
-            x.into_dispatch(),
-            energy.clone(),
-        )));
+        return Ok(Tensor::from_dispatch(
+            <Dispatch as EnergyOps>::energy_value(x.into_dispatch(), energy.clone()),
+        ));
     }
     reference(x, energy)
 }

@@ -212,7 +212,11 @@ pub fn vertex_loss(x: Tensor<3>, gt: Tensor<3>) -> Result<Tensor<1>> {
             found: format!("{:?}", gt.dims()),
         });
     }
-    let d = (x - gt).powi_scalar(2).sum_dim(2).add_scalar(SQRT_GUARD).sqrt();
+    let d = (x - gt)
+        .powi_scalar(2)
+        .sum_dim(2)
+        .add_scalar(SQRT_GUARD)
+        .sqrt();
     Ok(d.mean())
 }
 
