@@ -72,6 +72,13 @@ pub trait BodyProximity {
     /// The closest body point to `x` and the outward normal there, `None` when the body
     /// is farther than the query cares about (no contact).
     fn closest(&self, x: [f64; 3]) -> Option<BodyContact>;
+
+    /// [`BodyProximity::closest`] together with how far the body surface point under
+    /// the contact moved during the last body update (m): the friction anchor of a
+    /// moving body (HOOD's `Δp_body`). The default is a body at rest.
+    fn closest_moving(&self, x: [f64; 3]) -> Option<(BodyContact, [f64; 3])> {
+        self.closest(x).map(|c| (c, [0.0; 3]))
+    }
 }
 
 /// An infinite plane (a floor), outward normal `normal`.

@@ -85,6 +85,10 @@ pub enum SimError {
         /// The preset names, comma-separated.
         known: String,
     },
+    /// The body surface could not be built or updated (empty mesh, bad index, a
+    /// non-finite vertex, a refit with another vertex count).
+    #[error("body surface: {0}")]
+    BodySurface(#[from] weft_body::query::QueryError),
     /// The simulation produced non-finite positions or did not converge.
     #[error("step diverged: {message}")]
     Diverged {

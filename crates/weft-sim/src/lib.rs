@@ -13,12 +13,15 @@
 //! 3×3-block sparse matrix ([`BlockCsr`]) whose product and diagonal blocks feed
 //! preconditioned conjugate gradients. Positions are plain `&[[f64; 3]]` so the networks
 //! can evaluate losses on `f64` copies of their predictions. Body contacts are plain data
-//! ([`BodyContact`]); the body itself lives in weft-body.
+//! ([`BodyContact`]); the posed body ([`PosedBody`], on weft-body's closest-point
+//! queries) provides them, and [`simulate_sequence`] runs a garment on a body that follows
+//! a motion, with sub-steps and the body moving continuously between frames.
 //!
 //! Physics is `f64`, metres, seconds, kilograms, Y up. Derivations, equation numbers and
 //! material sources: `docs/physics.md`.
 
 pub mod bending;
+pub mod body;
 pub mod collision;
 pub mod contact;
 pub mod energy;
@@ -31,6 +34,7 @@ mod math;
 pub mod membrane;
 pub mod multilevel_losses;
 pub mod potential;
+pub mod sequence;
 pub mod solver;
 pub mod sparse;
 pub mod stretch;
@@ -39,6 +43,7 @@ pub mod stretch;
 mod fd_tests;
 
 pub use bending::{Bending, BendingScale, RestAngle};
+pub use body::{Penetration, PosedBody};
 pub use collision::CubicCollision;
 pub use contact::{BodyContact, BodyProximity, Plane, Sphere, VertexContact};
 pub use energy::{gradient_of, hessian_of, hessian_pattern_of, Energy, HessianKind};
@@ -50,6 +55,9 @@ pub use material::Material;
 pub use membrane::RestFrames;
 pub use multilevel_losses::{LinearCollision, MultilevelWeights, UvShear, UvStretch};
 pub use potential::{IncrementalPotential, Term, WeightedTerm};
+pub use sequence::{
+    simulate_sequence, FrameStats, SequenceError, SequenceOptions, SimulatedSequence,
+};
 pub use solver::{ClothSimulator, NewtonOptions, SimOptions};
 pub use sparse::{BlockCsr, PatternBuilder};
 pub use stretch::{Stretch, StretchParams};

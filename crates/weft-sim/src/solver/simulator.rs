@@ -14,7 +14,9 @@ use weft_mesh::TriMesh;
 
 use crate::bending::{Bending, BendingScale, RestAngle};
 use crate::collision::{CubicCollision, HOOD_COLLISION_EPS, HOOD_COLLISION_STIFFNESS};
-use crate::contact::{BodyProximity, VertexContact};
+use rayon::prelude::*;
+
+use crate::contact::{BodyContact, BodyProximity, VertexContact};
 use crate::error::{check_len, check_nonneg, check_vertex, SimError};
 use crate::friction::{Friction, FrictionContact, DEFAULT_FRICTION_EPS, HOOD_FRICTION_RADIUS};
 use crate::gravity::{lumped_masses, Gravity, STANDARD_GRAVITY};
@@ -221,7 +223,7 @@ impl ClothSimulator {
     pub fn step(
         &mut self,
         dt: f64,
-        body: Option<&dyn BodyProximity>,
+        body: Option<&(dyn BodyProximity + Sync)>,
     ) -> Result<StepReport, SimError> {
         check_nonneg(|| "time step".into(), dt, true)?;
         let n = self.x.len();
@@ -234,7 +236,7 @@ impl ClothSimulator {
                 }
             })
             .collect();
-        let (contacts, friction) = self.contacts(body);
+        let (contacts, friction, moved) = self.contacts(body);
         let (nc, nf) = (contacts.len(), friction.len());
         if let Some(inertia) = self.potential.inertia_mut() {
             inertia.set_dt(dt)?;
@@ -247,12 +249,12 @@ impl ClothSimulator {
             f.set_contacts(friction)?;
         }
         // Start from the inertial target, except where a contact is: there, from the
-        // start-of-step position (outside the body).
+        // start-of-step position carried along with the body surface under it.
         let mut x = target;
         if let Some(c) = self.potential.collision() {
-            for vc in c.contacts() {
+            for (vc, m) in c.contacts().iter().zip(&moved) {
                 let i = vc.vertex as usize;
-                x[i] = self.x[i];
+                x[i] = std::array::from_fn(|k| self.x[i][k] + m[k]);
             }
         }
         let report = minimize(
@@ -291,47 +293,57 @@ impl ClothSimulator {
         })
     }
 
-    /// Collision and friction contacts of the free vertices at the start of the step.
+    /// Collision and friction contacts of the free vertices at the start of the step
+    /// (queried in parallel: with a refit per sub-step this is a large share of a
+    /// step's cost), and each contact's body displacement over the step.
     fn contacts(
         &self,
-        body: Option<&dyn BodyProximity>,
-    ) -> (Vec<VertexContact>, Vec<FrictionContact>) {
+        body: Option<&(dyn BodyProximity + Sync)>,
+    ) -> (Vec<VertexContact>, Vec<FrictionContact>, Vec<[f64; 3]>) {
         let Some(body) = body else {
-            return (Vec::new(), Vec::new());
+            return (Vec::new(), Vec::new(), Vec::new());
         };
         let g = v3(self.options.gravity).norm();
+        let found: Vec<(u32, BodyContact, [f64; 3])> = self
+            .x
+            .par_iter()
+            .enumerate()
+            .filter(|(i, _)| !self.pinned[*i])
+            .filter_map(|(i, &p)| {
+                let (c, moved) = body.closest_moving(p)?;
+                (finite3(c.point) && finite3(c.normal) && finite3(moved))
+                    .then_some((i as u32, c, moved))
+            })
+            .collect();
         let mut contacts = Vec::new();
         let mut friction = Vec::new();
-        for (i, &p) in self.x.iter().enumerate() {
-            if self.pinned[i] {
-                continue;
-            }
-            let Some(c) = body.closest(p) else { continue };
-            if !(finite3(c.point) && finite3(c.normal)) {
-                continue;
-            }
+        let mut moved = Vec::new();
+        for (i, c, m) in found {
+            let p = self.x[i as usize];
             let d = c.signed_distance(p);
             if d < self.options.contact_radius {
                 contacts.push(VertexContact {
-                    vertex: i as u32,
+                    vertex: i,
                     contact: c,
                 });
+                moved.push(m);
             }
             if d < self.options.friction_radius && self.material.friction > 0.0 {
+                let before: [f64; 3] = std::array::from_fn(|k| c.point[k] - m[k]);
                 friction.push(FrictionContact::hood(
-                    i as u32,
+                    i,
                     p,
-                    c.point,
+                    before,
                     c.point,
                     c.normal,
                     c.normal,
-                    self.masses[i],
+                    self.masses[i as usize],
                     g,
                     self.material.friction,
                 ));
             }
         }
-        (contacts, friction)
+        (contacts, friction, moved)
     }
 }
 

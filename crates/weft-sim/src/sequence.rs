@@ -1,0 +1,538 @@
+//! Ground-truth sequences: a garment simulated on a body that follows a motion.
+//!
+//! [`simulate_sequence`] poses the body for every motion frame, warms the garment up
+//! (it is fitted to the body's rest pose; the body blends from there to the motion's
+//! first pose while the garment drapes and settles), then produces one output frame per
+//! motion frame, each made of `substeps` implicit-Euler steps with the body's vertices
+//! interpolated linearly between the two posed frames, so the body moves continuously
+//! and a fast limb never jumps through the cloth between frames.
+//!
+//! Bad input is reported before any work: a garment that starts deeper inside the body
+//! than [`SequenceOptions::max_initial_penetration`] is refused, shallower penetrations
+//! are pushed out to the surface; a divergent step ends the run with
+//! [`SequenceError::Diverged`] naming the frame and keeping the frames finished so far.
+
+use std::time::Instant;
+
+use weft_body::motion::Motion;
+use weft_body::{BodyError, BodyModel, ShapedBody, Skinning};
+use weft_mesh::vec3::{add_scaled, dist};
+use weft_mesh::TriMesh;
+
+use crate::body::{Penetration, PosedBody};
+use crate::energy::Energy;
+use crate::error::SimError;
+use crate::material::Material;
+use crate::solver::{ClothSimulator, SimOptions};
+
+/// How a sequence is simulated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SequenceOptions {
+    /// Implicit-Euler steps per output frame (`>= 1`).
+    pub substeps: usize,
+    /// Frames (at the motion's rate) before the first output frame: the first third
+    /// holds the rest pose (the garment drapes under gravity), the rest blends the pose
+    /// from rest to the motion's first frame.
+    pub warmup_frames: usize,
+    /// The simulator's parameters.
+    pub sim: SimOptions,
+    /// How the body is posed.
+    pub skinning: Skinning,
+    /// A garment vertex deeper than this inside the rest-pose body (m) makes the input
+    /// invalid; shallower ones are moved out to the surface (plus the collision
+    /// threshold) before the simulation starts.
+    pub max_initial_penetration: f64,
+    /// Use at most this many motion frames (`None`: all).
+    pub max_frames: Option<usize>,
+}
+
+impl Default for SequenceOptions {
+    fn default() -> Self {
+        SequenceOptions {
+            substeps: 4,
+            warmup_frames: 15,
+            sim: SimOptions::default(),
+            skinning: Skinning::Lbs,
+            max_initial_penetration: 0.02,
+            max_frames: None,
+        }
+    }
+}
+
+/// What one output frame looked like and cost.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FrameStats {
+    /// Output frame index (= motion frame index).
+    pub frame: usize,
+    /// Potential energy of the garment at the end of the frame: stretching + bending +
+    /// gravity (J; gravity measured from y = 0).
+    pub energy: f64,
+    /// Largest `|l/l̄ − 1|` over the garment's edges.
+    pub max_edge_strain: f64,
+    /// Mean `|l/l̄ − 1|` over the garment's edges.
+    pub mean_edge_strain: f64,
+    /// Garment vertices inside the body at the end of the frame.
+    pub penetrations: usize,
+    /// Depth of the deepest of them, m (0 when none).
+    pub max_penetration: f64,
+    /// Newton iterations over the frame's sub-steps.
+    pub newton_iterations: usize,
+    /// PCG iterations over the frame's sub-steps.
+    pub cg_iterations: usize,
+    /// Wall time of the frame, s (frame 0: the whole warm-up).
+    pub seconds: f64,
+}
+
+/// A simulated garment sequence.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SimulatedSequence {
+    /// Garment positions per output frame (`f32`, the precision of datasets).
+    pub frames: Vec<Vec<[f32; 3]>>,
+    /// Statistics per output frame.
+    pub stats: Vec<FrameStats>,
+    /// Garment vertices found inside the rest-pose body and pushed out before the run.
+    pub pushed_out: usize,
+}
+
+/// Why a sequence could not be (fully) simulated.
+#[derive(Debug, thiserror::Error)]
+pub enum SequenceError {
+    /// A step diverged; `finished` holds the frames before `frame`.
+    #[error("the simulation diverged at frame {frame}: {message} ({} frames finished)", finished.frames.len())]
+    Diverged {
+        /// The output frame being simulated (0 during the warm-up).
+        frame: usize,
+        /// What was detected.
+        message: String,
+        /// The frames finished before it.
+        finished: SimulatedSequence,
+    },
+    /// The garment, material or options are invalid.
+    #[error(transparent)]
+    Input(#[from] SimError),
+    /// The body or the motion could not be posed.
+    #[error("posing the body: {0}")]
+    Body(#[from] BodyError),
+    /// The garment starts too deep inside the body.
+    #[error("the garment starts inside the body: {count} vertices inside, the deepest {max_depth:.4} m (more than {limit} m); fit the garment to this body shape and its rest pose")]
+    StartsInside {
+        /// Vertices inside the body.
+        count: usize,
+        /// The deepest, m.
+        max_depth: f64,
+        /// The accepted depth, m.
+        limit: f64,
+    },
+    /// A posed body frame is not finite (a motion with NaN, a broken model).
+    #[error("motion frame {frame}: the posed body has a non-finite vertex")]
+    NonFiniteBody {
+        /// The motion frame.
+        frame: usize,
+    },
+}
+
+/// Edge rest lengths and the strain statistics of a garment.
+struct EdgeStrain {
+    edges: Vec<[u32; 2]>,
+    rest: Vec<f64>,
+}
+
+impl EdgeStrain {
+    fn new(mesh: &TriMesh) -> Self {
+        let edges = mesh.edges();
+        let rest = edges
+            .iter()
+            .map(|&[a, b]| dist(mesh.positions[a as usize], mesh.positions[b as usize]))
+            .collect();
+        EdgeStrain { edges, rest }
+    }
+
+    /// `(max, mean)` of `|l/l̄ − 1|`.
+    fn of(&self, x: &[[f64; 3]]) -> (f64, f64) {
+        let mut max: f64 = 0.0;
+        let mut sum = 0.0;
+        for (&[a, b], &l0) in self.edges.iter().zip(&self.rest) {
+            let s = (dist(x[a as usize], x[b as usize]) / l0 - 1.0).abs();
+            max = max.max(s);
+            sum += s;
+        }
+        (max, sum / self.edges.len().max(1) as f64)
+    }
+}
+
+/// The body at the key frames of the timeline: warm-up poses, then the motion frames.
+struct Timeline<'a> {
+    model: &'a BodyModel,
+    shaped: ShapedBody,
+    motion: &'a Motion,
+    warmup: usize,
+    frames: usize,
+    skinning: Skinning,
+}
+
+impl Timeline<'_> {
+    /// Number of key frames.
+    fn len(&self) -> usize {
+        self.warmup + self.frames
+    }
+
+    /// Posed body vertices at key frame `k` (`k = warmup` is motion frame 0).
+    fn body(&self, k: usize) -> Result<Vec<[f64; 3]>, SequenceError> {
+        let (frame, blend) = if k >= self.warmup {
+            (k - self.warmup, 1.0)
+        } else {
+            // Hold the rest pose for the first third, then ease into frame 0.
+            let hold = self.warmup / 3;
+            let t = if k < hold {
+                0.0
+            } else {
+                (k - hold) as f64 / (self.warmup - hold) as f64
+            };
+            (0, t * t * (3.0 - 2.0 * t))
+        };
+        let pose: Vec<[f64; 3]> = self.motion.poses()[frame]
+            .iter()
+            .map(|w| w.map(|c| f64::from(c) * blend))
+            .collect();
+        // The root translation of frame 0 through the warm-up: the garment is moved
+        // there at the start, so only the pose blends.
+        let t = self.motion.trans()[frame].map(f64::from);
+        let v = self
+            .model
+            .pose_vertices(&self.shaped, &pose, t, self.skinning)?;
+        if v.iter().flatten().any(|c| !c.is_finite()) {
+            return Err(SequenceError::NonFiniteBody { frame });
+        }
+        Ok(v)
+    }
+}
+
+fn lerp_into(a: &[[f64; 3]], b: &[[f64; 3]], t: f64, out: &mut Vec<[f64; 3]>) {
+    out.clear();
+    out.extend(
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| std::array::from_fn(|k| p[k] + t * (q[k] - p[k]))),
+    );
+}
+
+/// Potential energy (stretching + bending + gravity) of the simulator's state.
+fn potential_energy(sim: &ClothSimulator) -> Result<f64, SimError> {
+    let p = sim.potential();
+    let x = sim.positions();
+    let mut e = 0.0;
+    if let Some(s) = p.stretch() {
+        e += s.value(x)?;
+    }
+    if let Some(b) = p.bending() {
+        e += b.value(x)?;
+    }
+    if let Some(g) = p.gravity() {
+        e += g.value(x)?;
+    }
+    Ok(e)
+}
+
+/// Simulates `garment` (its rest mesh, fitted to `body` with `betas` in the body's rest
+/// pose, as weft_garment's generators make them) made of `material` on the body
+/// following `motion` at the motion's frame rate.
+///
+/// The first `warmup_frames` blend from the rest pose to the motion's first frame
+/// (draping the garment and letting it settle); then one output frame per motion frame
+/// (output frame 0 is the state after the warm-up), each made of `opts.substeps`
+/// implicit-Euler steps with the body interpolated continuously in between. `on_frame`
+/// is called after each output frame (progress bars).
+pub fn simulate_sequence(
+    garment: &TriMesh,
+    material: &Material,
+    body: &BodyModel,
+    betas: &[f64],
+    motion: &Motion,
+    opts: &SequenceOptions,
+    on_frame: &mut dyn FnMut(&FrameStats),
+) -> Result<SimulatedSequence, SequenceError> {
+    if opts.substeps == 0 {
+        return Err(SimError::InvalidParameter {
+            what: "sub-steps per frame".into(),
+            value: 0.0,
+            expected: "expected at least 1",
+        }
+        .into());
+    }
+    crate::error::check_nonneg(
+        || "maximum initial penetration".into(),
+        opts.max_initial_penetration,
+        false,
+    )?;
+    if let Some(i) = garment
+        .positions
+        .iter()
+        .position(|p| !weft_mesh::vec3::is_finite(*p))
+    {
+        return Err(SimError::InvalidVector {
+            what: format!("garment vertex {i}"),
+            message: "not finite",
+        }
+        .into());
+    }
+    let frames = opts
+        .max_frames
+        .map_or(motion.frame_count(), |m| m.min(motion.frame_count()));
+    if frames == 0 {
+        return Ok(SimulatedSequence::default());
+    }
+    let timeline = Timeline {
+        model: body,
+        shaped: body.shaped(betas)?,
+        motion,
+        warmup: opts.warmup_frames,
+        frames,
+        skinning: opts.skinning,
+    };
+    let dt = 1.0 / (motion.fps() * opts.substeps as f64);
+    let eps = opts.sim.collision_eps;
+
+    // The garment at the start: the rest mesh carried to frame 0's root translation,
+    // checked against (and pushed out of) the body at key frame 0.
+    let mut body_prev = timeline.body(0)?;
+    let mut posed = PosedBody::new(&body_prev, body.faces())?
+        .with_query_radius(opts.sim.contact_radius.max(opts.sim.friction_radius))?;
+    let t0 = motion.trans()[0].map(f64::from);
+    let mut start = garment.clone();
+    for p in &mut start.positions {
+        *p = add_scaled(*p, t0, 1.0);
+    }
+    let pushed_out = push_out(
+        &posed,
+        &mut start.positions,
+        eps,
+        opts.max_initial_penetration,
+    )?;
+    // The rest shape stays the garment as given (translation does not change it).
+    let mut sim = ClothSimulator::new(garment, material, opts.sim)?;
+    let zero = vec![[0.0; 3]; start.positions.len()];
+    sim.set_state(start.positions.clone(), zero)?;
+    let strain = EdgeStrain::new(garment);
+
+    let mut out = SimulatedSequence {
+        frames: Vec::with_capacity(frames),
+        stats: Vec::with_capacity(frames),
+        pushed_out,
+    };
+    let mut frame_stats = FrameStats::default();
+    let mut clock = Instant::now();
+    let mut body_now = Vec::new();
+    // Key frame `warmup` is output frame 0; with no warm-up it is the start state.
+    let first_output = timeline.warmup;
+    if first_output == 0 {
+        finish_frame(
+            &sim,
+            &posed,
+            &strain,
+            eps,
+            0,
+            &mut frame_stats,
+            clock,
+            &mut out,
+        )?;
+        on_frame(&frame_stats);
+        frame_stats = FrameStats::default();
+        clock = Instant::now();
+    }
+    for k in 1..timeline.len() {
+        let output = k.saturating_sub(first_output);
+        let body_next = timeline.body(k)?;
+        for s in 1..=opts.substeps {
+            lerp_into(
+                &body_prev,
+                &body_next,
+                s as f64 / opts.substeps as f64,
+                &mut body_now,
+            );
+            posed.refit(&body_now)?;
+            match sim.step(dt, Some(&posed)) {
+                Ok(r) => {
+                    frame_stats.newton_iterations += r.newton.iterations;
+                    frame_stats.cg_iterations += r.newton.cg_iterations;
+                }
+                Err(SimError::Diverged { message }) => {
+                    let message = if k < first_output {
+                        format!("warm-up frame {k} of {first_output}, sub-step {s}: {message}")
+                    } else {
+                        format!("sub-step {s}: {message}")
+                    };
+                    return Err(SequenceError::Diverged {
+                        frame: output,
+                        message,
+                        finished: out,
+                    });
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+        body_prev = body_next;
+        if k >= first_output {
+            finish_frame(
+                &sim,
+                &posed,
+                &strain,
+                eps,
+                output,
+                &mut frame_stats,
+                clock,
+                &mut out,
+            )?;
+            on_frame(&frame_stats);
+            frame_stats = FrameStats::default();
+            clock = Instant::now();
+        }
+    }
+    Ok(out)
+}
+
+/// Records the state as output frame `frame`.
+#[allow(clippy::too_many_arguments)]
+fn finish_frame(
+    sim: &ClothSimulator,
+    posed: &PosedBody,
+    strain: &EdgeStrain,
+    eps: f64,
+    frame: usize,
+    stats: &mut FrameStats,
+    clock: Instant,
+    out: &mut SimulatedSequence,
+) -> Result<(), SimError> {
+    let x = sim.positions();
+    let (max, mean) = strain.of(x);
+    let pen: Penetration = posed.penetration(x, eps)?;
+    stats.frame = frame;
+    stats.energy = potential_energy(sim)?;
+    stats.max_edge_strain = max;
+    stats.mean_edge_strain = mean;
+    stats.penetrations = pen.count;
+    stats.max_penetration = pen.max_depth;
+    stats.seconds = clock.elapsed().as_secs_f64();
+    out.frames
+        .push(x.iter().map(|p| p.map(|c| c as f32)).collect());
+    out.stats.push(stats.clone());
+    Ok(())
+}
+
+/// Moves garment vertices that are inside the body out to the surface plus `eps` along
+/// the contact normal; refuses (before moving anything) if one is deeper than `limit`.
+/// Returns how many were moved.
+fn push_out(
+    body: &PosedBody,
+    x: &mut [[f64; 3]],
+    eps: f64,
+    limit: f64,
+) -> Result<usize, SequenceError> {
+    let pen = body.penetration(x, limit)?;
+    if pen.beyond_tolerance > 0 {
+        return Err(SequenceError::StartsInside {
+            count: pen.count,
+            max_depth: pen.max_depth,
+            limit,
+        });
+    }
+    if pen.count == 0 {
+        return Ok(0);
+    }
+    let surface = body.surface();
+    let mut moved = 0;
+    for p in x.iter_mut() {
+        let c = surface.closest_point(*p).map_err(SimError::from)?;
+        if c.signed_distance < 0.0 {
+            *p = add_scaled(c.point, c.normal, eps);
+            moved += 1;
+        }
+    }
+    Ok(moved)
+}
+
+/// A cone skirt around the hips of a body, for tests and benchmarks of this crate
+/// (weft-garment's generators sit above weft-sim): each ring a circle around the
+/// body's cross-section at its height, 1 cm clear of it, flaring out below the waist.
+#[doc(hidden)]
+pub fn test_skirt(body_rest: &[[f64; 3]], around: usize, rings: usize) -> TriMesh {
+    let (top, bottom) = (0.08, -0.32);
+    let slab = |y: f64| {
+        let pts: Vec<[f64; 3]> = body_rest
+            .iter()
+            .copied()
+            .filter(|p| (p[1] - y).abs() < 0.015 && p[0].abs() < 0.3)
+            .collect();
+        let n = pts.len().max(1) as f64;
+        let cx = pts.iter().map(|p| p[0]).sum::<f64>() / n;
+        let cz = pts.iter().map(|p| p[2]).sum::<f64>() / n;
+        let r = pts
+            .iter()
+            .map(|p| ((p[0] - cx).powi(2) + (p[2] - cz).powi(2)).sqrt())
+            .fold(0.0, f64::max);
+        (cx, cz, r)
+    };
+    let (cx, cz, r_top) = slab(top);
+    let mut positions = Vec::with_capacity(rings * around);
+    for i in 0..rings {
+        let y = top + (bottom - top) * i as f64 / (rings - 1) as f64;
+        let (_, _, rb) = slab(y);
+        let r = (r_top + 0.01 + 0.25 * (top - y)).max(rb + 0.01);
+        for k in 0..around {
+            let phi = std::f64::consts::TAU * k as f64 / around as f64;
+            positions.push([cx + r * phi.cos(), y, cz - r * phi.sin()]);
+        }
+    }
+    let id = |r: usize, k: usize| (r * around + k % around) as u32;
+    let mut faces = Vec::new();
+    for r in 0..rings - 1 {
+        for k in 0..around {
+            faces.push([id(r, k), id(r + 1, k), id(r + 1, k + 1)]);
+            faces.push([id(r, k), id(r + 1, k + 1), id(r, k + 1)]);
+        }
+    }
+    TriMesh::new(positions, faces)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use weft_body::motion::{generate, MotionKind, ProceduralParams};
+
+    // Slow until the solver work lands (about 8 s per frame at the test profile).
+    #[test]
+    #[ignore]
+    fn a_skirt_walks() {
+        let body = weft_body::default_body().unwrap();
+        let rest = body.shaped(&[]).unwrap().vertices;
+        let skirt = test_skirt(&rest, 48, 16);
+        let mut p = ProceduralParams::new(MotionKind::Walk);
+        p.frames = 10;
+        let motion = generate(&p).unwrap();
+        let opts = SequenceOptions {
+            warmup_frames: 6,
+            ..SequenceOptions::default()
+        };
+        let mut seen = 0;
+        let seq = simulate_sequence(
+            &skirt,
+            &Material::cotton(),
+            &body,
+            &[],
+            &motion,
+            &opts,
+            &mut |s| {
+                seen += 1;
+                if std::env::var_os("WEFT_SIM_TRACE").is_some() {
+                    eprintln!("{s:?}");
+                }
+            },
+        )
+        .unwrap();
+        assert_eq!(seen, 10);
+        assert_eq!(seq.frames.len(), 10);
+        for s in &seq.stats {
+            assert!(s.max_penetration <= opts.sim.collision_eps, "{s:?}");
+            assert!(s.max_edge_strain < 0.1, "{s:?}");
+        }
+    }
+}
