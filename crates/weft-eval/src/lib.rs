@@ -4,9 +4,13 @@
 //!
 //! - [`metrics`]: `E_verts` (mm), `E_norm` (°), collision rate, edge strain.
 //! - [`stats`]: mean ± std in one pass.
+//! - [`quadrature`], [`attribution`]: eq. 9, Aumann–Shapley path integrals with
+//!   Gauss–Legendre quadrature.
 
+pub mod attribution;
 pub mod error;
 pub mod metrics;
+pub mod quadrature;
 pub mod stats;
 
 pub use error::EvalError;
