@@ -3,16 +3,19 @@
 //! variants of Table 1, and why a vertex moves the way it does (attribution, §4.1).
 //!
 //! - [`metrics`]: `E_verts` (mm), `E_norm` (°), collision rate, edge strain.
+//! - [`baseline`]: the LBS-only baseline (transferred body skinning weights).
 //! - [`stats`]: mean ± std in one pass.
 //! - [`quadrature`], [`attribution`]: eq. 9, Aumann–Shapley path integrals with
 //!   Gauss–Legendre quadrature.
 
 pub mod attribution;
+pub mod baseline;
 pub mod error;
 pub mod metrics;
 pub mod quadrature;
 pub mod stats;
 
+pub use baseline::{LbsBaseline, PosedBodies};
 pub use error::EvalError;
 pub use metrics::{FrameMetrics, GarmentTopology, MetricsSummary};
 pub use stats::{Accumulator, Summary};
