@@ -13,7 +13,7 @@
 //! `Bᵗ = Σ_submodules M^mp(X^fuse ⊙ E^t2(Vᵗ))`;
 //! `Mᵗ = Σ_j Wᵗ_j A_j(θ_t) (T + Bᵗ)`.
 
-use burn::module::{Module, Param};
+use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::activation::softmax;
 use burn::tensor::{Device, Tensor, TensorData};
 use weft_nn::{
@@ -72,6 +72,15 @@ pub struct Prediction {
     pub blend: Tensor<3>,
 }
 
+/// Draws every lazily initialised parameter.
+struct Materialise;
+
+impl ModuleVisitor for Materialise {
+    fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+        let _ = param.val();
+    }
+}
+
 /// Rows × cols host data as a tensor on `device`.
 fn tensor2(data: &[f32], shape: [usize; 2], device: &Device) -> Tensor<2> {
     Tensor::from_data(TensorData::new(data.to_vec(), shape), device)
@@ -124,7 +133,7 @@ impl Multilevel {
             .collect::<Result<Vec<_>, _>>()?;
         let weight_gain =
             Param::from_tensor(Tensor::<1>::from_floats([cfg.weight_gain as f32], device));
-        Ok(Multilevel {
+        let model = Multilevel {
             gg,
             gg_fuse,
             gs,
@@ -134,7 +143,12 @@ impl Multilevel {
             mp,
             weight_gain,
             config: cfg.clone(),
-        })
+        };
+        // burn initialises parameters lazily, on first use, from the device's shared
+        // generator: drawing them all now makes the model a function of the seed alone,
+        // whatever else draws from the generator later (other models, other threads).
+        model.visit(&mut Materialise);
+        Ok(model)
     }
 
     /// The configuration the model was built from.

@@ -1,0 +1,175 @@
+//! The Multilevel model end to end on a real garment, body and motion: shapes, skinning
+//! weights, LBS, determinism, pair caching, gradients, every pooling kind.
+
+mod common;
+
+use burn::module::{Module, ModuleVisitor, Param};
+use burn::tensor::Tensor;
+use common::{case, host, model, Case};
+use weft_body::features::SkinningWeights;
+use weft_body::skinning::{lbs, SkinWeights};
+use weft_models::multilevel::{FrameInputs, GarmentInput, MultilevelConfig, PoolingKind};
+
+fn inputs(
+    c: &Case,
+    cfg: &MultilevelConfig,
+    frames: std::ops::Range<usize>,
+) -> (GarmentInput, FrameInputs) {
+    let g = GarmentInput::new(&c.garment, &c.body, &c.betas, cfg).expect("garment input");
+    let f = FrameInputs::new(&c.body, &c.betas, &c.poses, &c.trans, c.fps, frames, cfg)
+        .expect("frame inputs");
+    (g, f)
+}
+
+#[test]
+fn forward_shapes_weights_and_lbs() {
+    let c = case();
+    let cfg = MultilevelConfig::cpu();
+    let (g, f) = inputs(&c, &cfg, 2..6);
+    let model = model(&cfg, 1, false);
+    let pair = model.encode_pair(&g).unwrap();
+    let p = model.forward(&pair, &g, &f).unwrap();
+    let n = c.garment.vertex_count();
+    assert_eq!(p.vertices.dims(), [4, n, 3]);
+    assert_eq!(p.weights.dims(), [4, n, 24]);
+    assert_eq!(p.blend.dims(), [4, n, 3]);
+    let sums = host(p.weights.clone().sum_dim(2));
+    assert!(
+        sums.iter().all(|s| (s - 1.0).abs() < 1e-5),
+        "W rows sum to 1"
+    );
+    assert!(host(p.vertices.clone()).iter().all(|x| x.is_finite()));
+    // Untrained: blend shapes start near zero (blend_gain), and the vertices near the LBS
+    // of the transferred weights.
+    let blend = host(p.blend);
+    let max_blend = blend.iter().fold(0.0f32, |a, &b| a.max(b.abs()));
+    assert!(max_blend < 0.05, "initial blend shapes {max_blend} m");
+    assert!(max_blend > 0.0, "blend shapes depend on the input");
+}
+
+/// With both gains zero the model is exactly LBS with the transferred weights (up to the
+/// prior's ε): checks the tensor LBS against weft-body's.
+#[test]
+fn zero_gains_reproduce_transferred_lbs() {
+    let c = case();
+    let cfg = MultilevelConfig::cpu()
+        .with_weight_gain(0.0)
+        .with_blend_gain(0.0);
+    let (g, f) = inputs(&c, &cfg, 3..5);
+    let model = model(&cfg, 2, false);
+    let p = model
+        .forward(&model.encode_pair(&g).unwrap(), &g, &f)
+        .unwrap();
+    let got = host(p.vertices);
+    let weights = SkinningWeights::from_f32(&g.transfer_weights, 24).unwrap();
+    let sparse = SkinWeights::from_dense(weights.as_slice(), 24);
+    let shaped = c.body.shaped(&[]).unwrap();
+    let n = c.garment.vertex_count();
+    for (k, t) in (3..5).enumerate() {
+        let pose: Vec<[f64; 3]> = (0..24)
+            .map(|j| std::array::from_fn(|a| f64::from(c.poses[t][3 * j + a])))
+            .collect();
+        let a = c
+            .body
+            .skeleton()
+            .skinning_transforms_axis_angle(&shaped.joints, &pose, c.trans[t].map(f64::from))
+            .unwrap();
+        let want = lbs(&c.garment.positions, &sparse, &a);
+        for i in 0..n {
+            for d in 0..3 {
+                let e = (f64::from(got[(k * n + i) * 3 + d]) - want[i][d]).abs();
+                assert!(e < 2e-3, "frame {t} vertex {i}: {e} m from LBS");
+            }
+        }
+    }
+}
+
+#[test]
+fn deterministic_for_a_seed_and_pair_cache_equals_recomputation() {
+    let c = case();
+    let cfg = MultilevelConfig::cpu();
+    let (g, f) = inputs(&c, &cfg, 0..3);
+    let run = |seed| {
+        let model = model(&cfg, seed, false);
+        let pair = model.encode_pair(&g).unwrap();
+        let cached = host(model.forward(&pair, &g, &f).unwrap().vertices);
+        let again = host(
+            model
+                .forward(&model.encode_pair(&g).unwrap(), &g, &f)
+                .unwrap()
+                .vertices,
+        );
+        assert!(cached == again, "cached pair encoding = recomputed");
+        assert!(host(pair.fused) == host(model.encode_pair(&g).unwrap().fused));
+        cached
+    };
+    let (a, b, other) = (run(7), run(7), run(8));
+    assert!(a == b, "same seed, same output");
+    assert!(a != other, "another seed, another model");
+}
+
+/// One backward on the autodiff device reaches every parameter.
+#[test]
+fn gradients_reach_every_parameter() {
+    struct Check<'a> {
+        grads: &'a burn::tensor::Gradients,
+        missing: Vec<String>,
+        path: Vec<String>,
+        count: usize,
+    }
+    impl ModuleVisitor for Check<'_> {
+        fn enter_module(&mut self, name: &str, _: &str) {
+            self.path.push(name.to_string());
+        }
+        fn exit_module(&mut self, _: &str, _: &str) {
+            self.path.pop();
+        }
+        fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<D>>) {
+            self.count += 1;
+            let ok = param.val().grad(self.grads).is_some_and(|g| {
+                host(g.abs().sum())
+                    .first()
+                    .is_some_and(|&s| s > 0.0 && s.is_finite())
+            });
+            if !ok {
+                self.missing.push(self.path.join("."));
+            }
+        }
+    }
+    let c = case();
+    let cfg = MultilevelConfig::cpu();
+    let (g, f) = inputs(&c, &cfg, 1..3);
+    let model = model(&cfg, 3, true);
+    let p = model
+        .forward(&model.encode_pair(&g).unwrap(), &g, &f)
+        .unwrap();
+    let target = p.vertices.clone().detach() + 0.01;
+    let loss = (p.vertices - target).powi_scalar(2).sum();
+    let grads = loss.backward();
+    let mut check = Check {
+        grads: &grads,
+        missing: Vec::new(),
+        path: Vec::new(),
+        count: 0,
+    };
+    model.visit(&mut check);
+    assert!(check.count > 50, "visited {} parameters", check.count);
+    assert!(check.missing.is_empty(), "no gradient: {:?}", check.missing);
+}
+
+#[test]
+fn every_pooling_kind_runs() {
+    let c = case();
+    for pooling in PoolingKind::ALL {
+        let cfg = MultilevelConfig::cpu()
+            .with_pooling(pooling)
+            .with_mp_submodules(1);
+        let (g, f) = inputs(&c, &cfg, 0..2);
+        let model = model(&cfg, 4, false);
+        let p = model
+            .forward(&model.encode_pair(&g).unwrap(), &g, &f)
+            .unwrap_or_else(|e| panic!("{}: {e}", pooling.name()));
+        assert_eq!(p.blend.dims(), [2, c.garment.vertex_count(), 3]);
+        assert!(host(p.vertices).iter().all(|x| x.is_finite()));
+    }
+}
