@@ -1,0 +1,557 @@
+//! Dataset configs: what to simulate, as TOML.
+//!
+//! A config names, per split, the garments (kind, vertex count, style seed), the body
+//! shapes (explicit β vectors and/or a number drawn from a seeded normal) and the
+//! motions (procedural, or AMASS `.npz` / `.bvh` files with a frame window), plus the
+//! frame rate, simulator sub-steps, material and seed shared by all. Every field has a
+//! default in code, so a config file only states what it changes; `weft data generate
+//! --print-config` writes a preset in full for editing.
+//!
+//! Two presets: [`DataConfig::tiny`] (generates in minutes on two cores, for tests and
+//! demos) and [`DataConfig::paper`] (the proportions of seed 000 §4 and supplement §3).
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use weft_body::motion::MotionKind;
+use weft_garment::GarmentKind;
+
+use crate::error::DataError;
+use crate::split::Split;
+
+/// The manifest and config layout version this crate writes and reads.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// A whole dataset config.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DataConfig {
+    /// Seed of everything drawn: garment styles without their own seed, random body
+    /// shapes, procedural motions without their own seed.
+    pub seed: u64,
+    /// Frame rate of every sequence (motions are resampled to it).
+    pub fps: f64,
+    /// Frames of a procedural motion that states no `frames`.
+    pub frames: usize,
+    /// Simulator sub-steps per frame.
+    pub substeps: usize,
+    /// Frames simulated before the first stored frame, blending from the rest pose to the
+    /// motion's first pose, so the garment starts settled.
+    pub warmup_frames: usize,
+    /// Material preset of garments that name none (silk, cotton, jersey, denim, leather,
+    /// hood).
+    pub material: String,
+    /// A body model in the SMPL `.npz` layout; absent: weft's default body.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub body: Option<PathBuf>,
+    /// Standard deviation of randomly drawn β components.
+    pub beta_sigma: f64,
+    /// How many leading β components a random body draws (the rest are 0); seed 000
+    /// varies the first two.
+    pub beta_components: usize,
+    /// Random β components stay within ±this (a truncated normal; seed 000: [−2, 2]).
+    pub beta_limit: f64,
+    /// The training split.
+    pub train: SplitConfig,
+    /// The validation split.
+    pub validation: SplitConfig,
+    /// The test split.
+    pub test: SplitConfig,
+}
+
+/// What one split holds.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SplitConfig {
+    /// Explicit body shapes (β vectors; missing components are 0).
+    pub betas: Vec<Vec<f64>>,
+    /// More body shapes drawn from a normal seeded by the dataset seed and the split.
+    pub random_bodies: usize,
+    /// How many motions each garment–body pair is simulated with, assigned round-robin so
+    /// every motion is used about equally; 0: every motion with every pair.
+    pub motions_per_pair: usize,
+    /// The garments.
+    pub garments: Vec<GarmentSpec>,
+    /// The motions.
+    pub motions: Vec<MotionSpec>,
+}
+
+/// One garment: a procedural template fitted to each body it is simulated on.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GarmentSpec {
+    /// skirt, dress, tshirt, tank, longsleeve, shorts, pants or jumpsuit.
+    pub kind: String,
+    /// Target vertex count (the generator lands within ±15 %).
+    pub vertices: usize,
+    /// Style seed; absent: derived from the dataset seed and the garment's position.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// Material preset; absent: the config's `material`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+}
+
+/// One motion: procedural (`kind`) or read from a file (`file`), never both.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MotionSpec {
+    /// A procedural motion: walk, run, jump, dance, kick, raise-arms, twist or bow.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
+    /// An AMASS-style `.npz` or a `.bvh` file (relative paths: from the config file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<PathBuf>,
+    /// Seed of a procedural motion's variations; absent: derived from the dataset seed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// Forward speed (walk, run; m/s) or tempo factor (others); absent: the kind's
+    /// default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed: Option<f64>,
+    /// Amplitude factor of a procedural motion (1: natural).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub amplitude: Option<f64>,
+    /// First frame of a file's motion (after resampling to the dataset's fps).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub start: usize,
+    /// Frames to take; absent: the config's `frames` for procedural motions, the rest of
+    /// the file for files.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frames: Option<usize>,
+}
+
+fn is_zero(x: &usize) -> bool {
+    *x == 0
+}
+
+impl Default for DataConfig {
+    fn default() -> Self {
+        DataConfig {
+            seed: 0,
+            fps: 30.0,
+            frames: 40,
+            substeps: 1,
+            warmup_frames: 10,
+            material: "silk".into(),
+            body: None,
+            beta_sigma: 1.0,
+            beta_components: 2,
+            beta_limit: 2.0,
+            train: SplitConfig::default(),
+            validation: SplitConfig::default(),
+            test: SplitConfig::default(),
+        }
+    }
+}
+
+/// Names of the presets, for the CLI's help and errors.
+pub const PRESET_NAMES: [&str; 2] = ["tiny", "paper"];
+
+fn garment(kind: &str, vertices: usize, seed: u64) -> GarmentSpec {
+    GarmentSpec {
+        kind: kind.into(),
+        vertices,
+        seed: Some(seed),
+        material: None,
+    }
+}
+
+fn motion(kind: &str, seed: u64, frames: Option<usize>) -> MotionSpec {
+    MotionSpec {
+        kind: Some(kind.into()),
+        seed: Some(seed),
+        frames,
+        ..MotionSpec::default()
+    }
+}
+
+impl DataConfig {
+    /// The preset called `name` ([`PRESET_NAMES`]).
+    pub fn preset(name: &str) -> Result<Self, DataError> {
+        match name {
+            "tiny" => Ok(Self::tiny()),
+            "paper" => Ok(Self::paper()),
+            _ => Err(DataError::config(
+                "preset",
+                format!("{name:?}; expected one of {}", PRESET_NAMES.join(", ")),
+            )),
+        }
+    }
+
+    /// A dataset small enough to generate in under five minutes on two cores and still
+    /// worth training on: skirts, dresses and t-shirts of 500–850 vertices on three train
+    /// shapes and four train motions; one unseen garment, shape and motion for
+    /// validation, and for test two unseen garments (kinds seen in training) on an unseen
+    /// shape and motion. Timings: docs/benchmarks.md ("Datasets").
+    pub fn tiny() -> Self {
+        DataConfig {
+            frames: 40,
+            train: SplitConfig {
+                betas: vec![vec![0.0, 0.0], vec![1.5, -0.5], vec![-1.0, 1.0]],
+                random_bodies: 0,
+                motions_per_pair: 1,
+                garments: vec![
+                    garment("skirt", 600, 1),
+                    garment("dress", 800, 2),
+                    garment("tshirt", 700, 3),
+                    garment("skirt", 800, 4),
+                    garment("tshirt", 550, 5),
+                ],
+                motions: vec![
+                    motion("walk", 1, None),
+                    motion("dance", 2, None),
+                    motion("kick", 3, None),
+                    motion("run", 4, None),
+                ],
+            },
+            validation: SplitConfig {
+                betas: vec![],
+                random_bodies: 1,
+                motions_per_pair: 0,
+                garments: vec![garment("dress", 650, 6)],
+                motions: vec![motion("raise-arms", 5, None)],
+            },
+            test: SplitConfig {
+                betas: vec![],
+                random_bodies: 1,
+                motions_per_pair: 0,
+                garments: vec![garment("skirt", 700, 7), garment("tshirt", 750, 8)],
+                motions: vec![motion("twist", 6, None)],
+            },
+            ..DataConfig::default()
+        }
+    }
+
+    /// Seed 000's proportions (§4; supplement §3): 55 / 5 / 10 garments (dresses and
+    /// jumpsuits, as in CLOTH3D, plus skirts), nine train shapes (β₁, β₂ each at four
+    /// evenly spaced points of [−2, 2], and the zero shape), three validation and four
+    /// random test shapes, and about 50 000 / 3 000 / 8 000 poses: every garment–shape
+    /// pair is simulated on one motion (100 frames in train, 200 in validation and test).
+    pub fn paper() -> Self {
+        let kinds = ["dress", "jumpsuit", "dress", "skirt"];
+        let sizes = [2000, 3000, 4000, 6000, 2500];
+        let garments = |first: u64, count: u64| -> Vec<GarmentSpec> {
+            (first..first + count)
+                .map(|i| {
+                    garment(
+                        kinds[i as usize % kinds.len()],
+                        sizes[i as usize % sizes.len()],
+                        i,
+                    )
+                })
+                .collect()
+        };
+        let grid = [-2.0, -2.0 / 3.0, 2.0 / 3.0, 2.0];
+        let mut train_betas = vec![vec![0.0, 0.0]];
+        for b in grid {
+            train_betas.push(vec![b, 0.0]);
+        }
+        for b in grid {
+            train_betas.push(vec![0.0, b]);
+        }
+        let train_motions = ["walk", "run", "jump", "dance", "kick"]
+            .iter()
+            .enumerate()
+            .flat_map(|(i, k)| {
+                let i = i as u64;
+                [motion(k, 100 + i, Some(100)), motion(k, 200 + i, Some(100))]
+            })
+            .collect();
+        DataConfig {
+            frames: 100,
+            train: SplitConfig {
+                betas: train_betas,
+                random_bodies: 0,
+                motions_per_pair: 1,
+                garments: garments(0, 55),
+                motions: train_motions,
+            },
+            validation: SplitConfig {
+                betas: vec![],
+                random_bodies: 3,
+                motions_per_pair: 1,
+                garments: garments(55, 5),
+                motions: vec![motion("bow", 300, Some(200))],
+            },
+            test: SplitConfig {
+                betas: vec![],
+                random_bodies: 4,
+                motions_per_pair: 1,
+                garments: garments(60, 10),
+                motions: vec![
+                    motion("raise-arms", 400, Some(200)),
+                    motion("twist", 401, Some(200)),
+                ],
+            },
+            ..DataConfig::default()
+        }
+    }
+
+    /// Reads a config file; relative motion file paths are taken from the file's
+    /// directory. The result is [`validate`](Self::validate)d.
+    pub fn load(path: &Path) -> Result<Self, DataError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| DataError::io(path, "cannot read the dataset config", e))?;
+        let mut config = Self::from_toml(&text).map_err(|e| match e {
+            DataError::ConfigSyntax { message, .. } => DataError::ConfigSyntax {
+                path: path.to_path_buf(),
+                message,
+            },
+            other => other,
+        })?;
+        if let Some(dir) = path.parent() {
+            let rebase = |p: &mut PathBuf| {
+                if p.is_relative() && !dir.as_os_str().is_empty() {
+                    *p = dir.join(&*p);
+                }
+            };
+            for split in [&mut config.train, &mut config.validation, &mut config.test] {
+                for m in &mut split.motions {
+                    if let Some(f) = &mut m.file {
+                        rebase(f);
+                    }
+                }
+            }
+            if let Some(b) = &mut config.body {
+                rebase(b);
+            }
+        }
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// Parses TOML text (not yet validated).
+    pub fn from_toml(text: &str) -> Result<Self, DataError> {
+        toml::from_str(text).map_err(|e| DataError::ConfigSyntax {
+            path: PathBuf::from("<config>"),
+            message: e.to_string().trim_end().to_string(),
+        })
+    }
+
+    /// The config as TOML, every field written out.
+    pub fn to_toml(&self) -> Result<String, DataError> {
+        toml::to_string(self).map_err(|e| DataError::config("<config>", e.to_string()))
+    }
+
+    /// The split's config.
+    pub fn split(&self, split: Split) -> &SplitConfig {
+        match split {
+            Split::Train => &self.train,
+            Split::Validation => &self.validation,
+            Split::Test => &self.test,
+        }
+    }
+
+    /// Checks every value's range and that each split has something to simulate. Split
+    /// overlap is checked on the resolved plan ([`crate::plan::Plan::new`]), where
+    /// derived seeds and drawn shapes are known.
+    pub fn validate(&self) -> Result<(), DataError> {
+        if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= 1000.0) {
+            return Err(DataError::config(
+                "fps",
+                format!(
+                    "{}; expected a frame rate above 0 and at most 1000",
+                    self.fps
+                ),
+            ));
+        }
+        if self.frames == 0 {
+            return Err(DataError::config("frames", "0; expected at least 1 frame"));
+        }
+        if !(1..=100).contains(&self.substeps) {
+            return Err(DataError::config(
+                "substeps",
+                format!("{}; expected 1 to 100", self.substeps),
+            ));
+        }
+        if self.warmup_frames > 10_000 {
+            return Err(DataError::config(
+                "warmup_frames",
+                format!("{}; expected at most 10000", self.warmup_frames),
+            ));
+        }
+        check_material("material", &self.material)?;
+        if !(self.beta_sigma.is_finite() && self.beta_sigma >= 0.0) {
+            return Err(DataError::config(
+                "beta_sigma",
+                format!("{}; expected a finite value ≥ 0", self.beta_sigma),
+            ));
+        }
+        if !(self.beta_limit.is_finite() && self.beta_limit > 0.0) {
+            return Err(DataError::config(
+                "beta_limit",
+                format!("{}; expected a finite value above 0", self.beta_limit),
+            ));
+        }
+        for split in Split::ALL {
+            self.validate_split(split)?;
+        }
+        Ok(())
+    }
+
+    fn validate_split(&self, split: Split) -> Result<(), DataError> {
+        let s = self.split(split);
+        let name = split.name();
+        if s.garments.is_empty() {
+            return Err(DataError::config(
+                format!("{name}.garments"),
+                "empty; expected at least one garment per split",
+            ));
+        }
+        if s.motions.is_empty() {
+            return Err(DataError::config(
+                format!("{name}.motions"),
+                "empty; expected at least one motion per split",
+            ));
+        }
+        if s.betas.is_empty() && s.random_bodies == 0 {
+            return Err(DataError::config(
+                format!("{name}.betas"),
+                "no body shapes (betas empty and random_bodies = 0); expected at least one",
+            ));
+        }
+        for (i, b) in s.betas.iter().enumerate() {
+            if let Some(j) = b.iter().position(|x| !x.is_finite()) {
+                return Err(DataError::config(
+                    format!("{name}.betas[{i}][{j}]"),
+                    "not a finite number",
+                ));
+            }
+        }
+        for (i, g) in s.garments.iter().enumerate() {
+            let field = format!("{name}.garments[{i}]");
+            GarmentKind::parse(&g.kind).map_err(|_| {
+                DataError::config(
+                    format!("{field}.kind"),
+                    format!(
+                        "{:?}; expected one of {}",
+                        g.kind,
+                        GarmentKind::NAMES.join(", ")
+                    ),
+                )
+            })?;
+            let (lo, hi) = (weft_garment::MIN_VERTICES, weft_garment::MAX_VERTICES);
+            if !(lo..=hi).contains(&g.vertices) {
+                return Err(DataError::config(
+                    format!("{field}.vertices"),
+                    format!("{}; expected {lo} to {hi}", g.vertices),
+                ));
+            }
+            if let Some(m) = &g.material {
+                check_material(&format!("{field}.material"), m)?;
+            }
+        }
+        for (i, m) in s.motions.iter().enumerate() {
+            let field = format!("{name}.motions[{i}]");
+            match (&m.kind, &m.file) {
+                (Some(_), Some(_)) | (None, None) => {
+                    return Err(DataError::config(
+                        field,
+                        "expected exactly one of `kind` (procedural) or `file` (.npz/.bvh)",
+                    ))
+                }
+                (Some(k), None) => {
+                    if MotionKind::parse(k).is_none() {
+                        let names: Vec<&str> = MotionKind::ALL.iter().map(|k| k.name()).collect();
+                        return Err(DataError::config(
+                            format!("{field}.kind"),
+                            format!("{k:?}; expected one of {}", names.join(", ")),
+                        ));
+                    }
+                    if m.start != 0 {
+                        return Err(DataError::config(
+                            format!("{field}.start"),
+                            "only file motions take a start frame",
+                        ));
+                    }
+                }
+                (None, Some(_)) => {
+                    if m.seed.is_some() || m.speed.is_some() || m.amplitude.is_some() {
+                        return Err(DataError::config(
+                            field,
+                            "seed, speed and amplitude apply to procedural motions only",
+                        ));
+                    }
+                }
+            }
+            if m.frames == Some(0) {
+                return Err(DataError::config(
+                    format!("{field}.frames"),
+                    "0; expected at least 1 frame",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_material(field: &str, name: &str) -> Result<(), DataError> {
+    weft_sim::Material::preset(name)
+        .map(|_| ())
+        .map_err(|e| DataError::config(field, e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_validate_and_round_trip_through_toml() {
+        for name in PRESET_NAMES {
+            let c = DataConfig::preset(name).unwrap();
+            c.validate().unwrap();
+            let text = c.to_toml().unwrap();
+            let back = DataConfig::from_toml(&text).unwrap();
+            assert_eq!(back, c, "{name}");
+        }
+    }
+
+    #[test]
+    fn an_empty_file_is_the_defaults_and_fails_validation_by_field() {
+        let c = DataConfig::from_toml("").unwrap();
+        assert_eq!(c, DataConfig::default());
+        let err = c.validate().unwrap_err().to_string();
+        assert!(err.contains("train.garments"), "{err}");
+    }
+
+    #[test]
+    fn errors_name_the_field() {
+        let mut c = DataConfig::tiny();
+        c.test.garments[1].kind = "cape".into();
+        let err = c.validate().unwrap_err().to_string();
+        assert!(err.contains("test.garments[1].kind"), "{err}");
+        assert!(err.contains("skirt"), "{err}");
+
+        let mut c = DataConfig::tiny();
+        c.train.motions[0].file = Some("a.npz".into());
+        let err = c.validate().unwrap_err().to_string();
+        assert!(err.contains("train.motions[0]"), "{err}");
+
+        let mut c = DataConfig::tiny();
+        c.validation.garments[0].material = Some("tweed".into());
+        let err = c.validate().unwrap_err().to_string();
+        assert!(err.contains("validation.garments[0].material"), "{err}");
+
+        let err = DataConfig::from_toml("fps = 30.0\nframez = 3\n")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("framez"), "{err}");
+    }
+
+    #[test]
+    fn paper_has_the_seed_000_proportions() {
+        let c = DataConfig::paper();
+        assert_eq!(c.train.garments.len(), 55);
+        assert_eq!(c.validation.garments.len(), 5);
+        assert_eq!(c.test.garments.len(), 10);
+        assert_eq!(c.train.betas.len(), 9);
+        assert_eq!(c.validation.random_bodies, 3);
+        let poses = |s: &SplitConfig, frames: usize| {
+            s.garments.len() * (s.betas.len() + s.random_bodies) * frames
+        };
+        assert_eq!(poses(&c.train, 100), 49_500);
+        assert_eq!(poses(&c.validation, 200), 3_000);
+        assert_eq!(poses(&c.test, 200), 8_000);
+    }
+}

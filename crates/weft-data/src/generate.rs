@@ -1,0 +1,716 @@
+//! `weft data generate`: simulate every planned sequence into its shard.
+//!
+//! Order of work: load the body model, compute the plan ([`crate::plan`]), reconcile it
+//! with a manifest already in the directory (resume), write the garment templates,
+//! build the motions, then simulate the pending sequences of this job in parallel
+//! (rayon, one sequence per task; the simulator parallelises inside a step too).
+//!
+//! Resuming: a sequence whose manifest record is done (or diverged) and whose shard is
+//! present with the expected header and tensor shapes is kept; anything else — no
+//! shard, a torn or foreign file, a temporary file left by a kill — is simulated again.
+//! Shards and stats are written to temporary files and renamed, and the manifest is
+//! rewritten atomically after each finished shard, so a kill at any moment loses at most
+//! the sequences in flight.
+//!
+//! Determinism: the plan, the garments, the motions and the simulator are functions of
+//! the config and seed alone, and records keep plan order whatever order the sequences
+//! finish in, so the same config and seed give byte-identical shards and manifest
+//! (the stats files hold wall times and differ).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use weft_body::motion::{
+    generate as procedural_motion, read_motion, resample, Motion, MotionFileOptions, MotionKind,
+    ProceduralParams,
+};
+use weft_body::BodyModel;
+use weft_garment::{FitBody, Garment, GarmentKind, Style};
+use weft_sim::Material;
+
+use crate::config::DataConfig;
+use crate::dataset::shape_of;
+use crate::error::DataError;
+use crate::manifest::{
+    GarmentRecord, Job, Manifest, MotionOrigin, MotionRecord, SequenceRecord, Status, MANIFEST_FILE,
+};
+use crate::plan::plan;
+use crate::shard::{self, ShardData, POSE_VALUES};
+
+/// What a simulator needs for one sequence.
+pub struct SimInput<'a> {
+    /// The garment fitted to this body in its rest pose.
+    pub garment: &'a weft_mesh::TriMesh,
+    /// Its material.
+    pub material: &'a Material,
+    /// The body model.
+    pub body: &'a BodyModel,
+    /// The body's shape.
+    pub betas: &'a [f64],
+    /// The motion, already cut to the sequence's frames.
+    pub motion: &'a Motion,
+    /// Sub-steps per frame.
+    pub substeps: usize,
+    /// Warm-up frames before the first stored frame.
+    pub warmup_frames: usize,
+}
+
+/// What a simulator made of one sequence.
+pub enum SimOutcome {
+    /// Every frame.
+    Finished {
+        /// Garment positions per frame.
+        frames: Vec<Vec<[f32; 3]>>,
+        /// Per-frame statistics (a JSON array).
+        stats: serde_json::Value,
+    },
+    /// Diverged at `frame`; `frames` holds the frames before it.
+    Diverged {
+        /// The frame that failed.
+        frame: usize,
+        /// What the simulator detected.
+        message: String,
+        /// The finished frames.
+        frames: Vec<Vec<[f32; 3]>>,
+        /// Their statistics.
+        stats: serde_json::Value,
+    },
+}
+
+/// Simulates one sequence. [`Physics`] is the real one (weft-sim's implicit-Euler
+/// simulator); the trait lets tests exercise planning, resuming and sharding with a
+/// cheap deterministic stand-in.
+pub trait SequenceSimulator: Sync {
+    /// Simulates `input`, calling `on_frame` after each output frame. `Err` is a
+    /// refused input (the record becomes [`Status::Failed`]); divergence is an outcome.
+    fn simulate(
+        &self,
+        input: &SimInput<'_>,
+        on_frame: &mut dyn FnMut(),
+    ) -> Result<SimOutcome, String>;
+}
+
+/// weft-sim's ground-truth simulator ([`weft_sim::sequence::simulate_sequence`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Physics;
+
+impl SequenceSimulator for Physics {
+    fn simulate(
+        &self,
+        input: &SimInput<'_>,
+        on_frame: &mut dyn FnMut(),
+    ) -> Result<SimOutcome, String> {
+        use weft_sim::sequence::{simulate_sequence, SequenceError, SequenceOptions};
+        let opts = SequenceOptions {
+            substeps: input.substeps,
+            warmup_frames: input.warmup_frames,
+            ..SequenceOptions::default()
+        };
+        let stats_json = |s: &[weft_sim::sequence::FrameStats]| {
+            serde_json::to_value(s).unwrap_or(serde_json::Value::Null)
+        };
+        match simulate_sequence(
+            input.garment,
+            input.material,
+            input.body,
+            input.betas,
+            input.motion,
+            &opts,
+            &mut |_| on_frame(),
+        ) {
+            Ok(s) => Ok(SimOutcome::Finished {
+                stats: stats_json(&s.stats),
+                frames: s.frames,
+            }),
+            Err(SequenceError::Diverged {
+                frame,
+                message,
+                finished,
+            }) => Ok(SimOutcome::Diverged {
+                frame,
+                message,
+                stats: stats_json(&finished.stats),
+                frames: finished.frames,
+            }),
+            Err(e) => Err(e.to_string()),
+        }
+    }
+}
+
+/// Progress of a generation run. The CLI draws a bar ([`crate::progress`]); tests
+/// ignore it.
+pub trait Progress: Sync {
+    /// Work is about to start: `total` frames to simulate in `sequences` sequences
+    /// (`kept` sequences were already finished).
+    fn start(&self, total: u64, sequences: usize, kept: usize);
+    /// One frame finished.
+    fn frame(&self);
+    /// Something to tell the user (a diverged or failed sequence).
+    fn message(&self, text: &str);
+    /// All work done.
+    fn finish(&self);
+}
+
+/// A [`Progress`] that shows nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Silent;
+
+impl Progress for Silent {
+    fn start(&self, _: u64, _: usize, _: usize) {}
+    fn frame(&self) {}
+    fn message(&self, _: &str) {}
+    fn finish(&self) {}
+}
+
+/// Options of [`generate`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GenerateOptions {
+    /// Generate only the sequences of this `--shard i/n` job (and write
+    /// `manifest.part-i-of-n.json`).
+    pub job: Option<Job>,
+}
+
+/// What a run did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GenerateReport {
+    /// The manifest written.
+    pub manifest_path: PathBuf,
+    /// Sequences of this job.
+    pub owned: usize,
+    /// Of them, already finished before this run.
+    pub kept: usize,
+    /// Simulated to the end in this run.
+    pub done: usize,
+    /// Diverged in this run (`(sequence id, frame)`).
+    pub diverged: Vec<(String, usize)>,
+    /// Failed in this run (`(sequence id, reason)`).
+    pub failed: Vec<(String, String)>,
+    /// Frames simulated in this run.
+    pub frames: usize,
+    /// Wall time of the simulation stage, s.
+    pub seconds: f64,
+}
+
+/// Loads the body model a config names (weft's default body when `None`).
+pub fn load_body(path: Option<&Path>) -> Result<BodyModel, DataError> {
+    match path {
+        Some(p) => BodyModel::load(p).map_err(|source| DataError::Body {
+            what: format!("model {}", p.display()),
+            source: Box::new(source),
+        }),
+        None => weft_body::default_body().map_err(|source| DataError::Body {
+            what: "model (weft's default body)".into(),
+            source: Box::new(source),
+        }),
+    }
+}
+
+/// Generates (or resumes) the dataset of `config` in `out`.
+pub fn generate(
+    config: &DataConfig,
+    out: &Path,
+    options: &GenerateOptions,
+    simulator: &dyn SequenceSimulator,
+    progress: &dyn Progress,
+) -> Result<GenerateReport, DataError> {
+    config.validate()?;
+    let model = load_body(config.body.as_deref())?;
+    let mut manifest = plan(config, model.num_betas(), model.source())?;
+    manifest.job = options.job;
+    for sub in ["", "garments", "shards", "stats"] {
+        let d = out.join(sub);
+        std::fs::create_dir_all(&d)
+            .map_err(|e| DataError::io(&d, "cannot create the dataset directory", e))?;
+    }
+    let manifest_path = out.join(
+        options
+            .job
+            .map_or_else(|| MANIFEST_FILE.to_string(), |j| j.manifest_file()),
+    );
+    let owns = |i: usize| options.job.map_or(true, |j| j.owns(i));
+    let kept = resume(&mut manifest, &manifest_path, out, &owns)?;
+    manifest.write(&manifest_path)?;
+
+    write_garment_templates(&manifest.garments, &model, out)?;
+
+    let pending: Vec<usize> = manifest
+        .sequences
+        .iter()
+        .filter(|s| owns(s.index) && s.status == Status::Pending)
+        .map(|s| s.index)
+        .collect();
+    let owned = manifest.sequences.iter().filter(|s| owns(s.index)).count();
+
+    // Motions and fitted bodies used by this run, built once each.
+    let mut motions: BTreeMap<String, Result<Motion, String>> = BTreeMap::new();
+    for &i in &pending {
+        let id = &manifest.sequences[i].motion_id;
+        if !motions.contains_key(id) {
+            let record = manifest
+                .motions
+                .iter()
+                .find(|m| &m.id == id)
+                .ok_or_else(|| DataError::UnknownId {
+                    kind: "motion",
+                    id: id.clone(),
+                    dir: out.to_path_buf(),
+                })?;
+            motions.insert(
+                id.clone(),
+                build_motion(record, config.fps, &model).map_err(|e| error_chain(&e)),
+            );
+        }
+    }
+    // File motions learn their length here: fix the frame ranges of their sequences.
+    for &i in &pending {
+        let s = &mut manifest.sequences[i];
+        if let Some(Ok(m)) = motions.get(&s.motion_id) {
+            s.frame_range[1] = s.frame_range[0] + m.frame_count();
+        }
+    }
+    let body_ids: Vec<&String> = {
+        let mut ids: Vec<&String> = pending
+            .iter()
+            .map(|&i| &manifest.sequences[i].body_id)
+            .collect();
+        ids.sort();
+        ids.dedup();
+        ids
+    };
+    let fits: BTreeMap<String, Result<FitBody, String>> = body_ids
+        .par_iter()
+        .map(|id| {
+            let betas = manifest
+                .bodies
+                .iter()
+                .find(|b| &b.id == *id)
+                .map(|b| betas_f64(&b.betas))
+                .unwrap_or_default();
+            let fit = FitBody::new(&model, &betas).map_err(|e| error_chain(&e));
+            ((*id).clone(), fit)
+        })
+        .collect();
+
+    // Longest first, so the last tasks of the parallel loop are short.
+    let mut order = pending.clone();
+    order.sort_by_key(|&i| {
+        let s = &manifest.sequences[i];
+        let g = manifest.garments.iter().find(|g| g.id == s.garment_id);
+        let cost = g.map_or(0, |g| g.target_vertices)
+            * (s.frame_range[1] - s.frame_range[0] + config.warmup_frames);
+        (std::cmp::Reverse(cost), i)
+    });
+    let total: u64 = order
+        .iter()
+        .map(|&i| {
+            let r = manifest.sequences[i].frame_range;
+            (r[1] - r[0]) as u64
+        })
+        .sum();
+    progress.start(total, order.len(), kept);
+
+    let started = Instant::now();
+    let shared = Mutex::new((
+        manifest,
+        GenerateReport {
+            manifest_path: manifest_path.clone(),
+            owned,
+            kept,
+            done: 0,
+            diverged: Vec::new(),
+            failed: Vec::new(),
+            frames: 0,
+            seconds: 0.0,
+        },
+    ));
+    let snapshot: Manifest = lock(&shared).0.clone();
+    let results: Vec<Result<(), DataError>> = order
+        .par_iter()
+        .map(|&i| {
+            let record = &snapshot.sequences[i];
+            let outcome = run_sequence(
+                record, &snapshot, config, &model, &motions, &fits, out, simulator, progress,
+            )?;
+            let mut guard = lock(&shared);
+            let (manifest, report) = &mut *guard;
+            let s = &mut manifest.sequences[i];
+            report.frames += outcome.frames;
+            *s = outcome.record;
+            match s.status {
+                Status::Done => report.done += 1,
+                Status::Diverged => {
+                    let frame = s.diverged_at.unwrap_or(0);
+                    progress.message(&format!(
+                        "sequence {} diverged at frame {frame}: {} ({} frames kept)",
+                        s.id,
+                        s.message.as_deref().unwrap_or(""),
+                        s.frames
+                    ));
+                    report.diverged.push((s.id.clone(), frame));
+                }
+                Status::Failed => {
+                    let why = s.message.clone().unwrap_or_default();
+                    progress.message(&format!("sequence {} failed: {why}", s.id));
+                    report.failed.push((s.id.clone(), why));
+                }
+                Status::Pending => {}
+            }
+            manifest.write(&manifest_path)
+        })
+        .collect();
+    progress.finish();
+    results
+        .into_iter()
+        .collect::<Result<Vec<()>, DataError>>()?;
+    let (manifest, mut report) = shared
+        .into_inner()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    manifest.write(&manifest_path)?;
+    report.seconds = started.elapsed().as_secs_f64();
+    report.diverged.sort();
+    report.failed.sort();
+    Ok(report)
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// An error and its sources on one line.
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text
+}
+
+fn betas_f64(b: &[f32]) -> Vec<f64> {
+    b.iter().map(|&x| f64::from(x)).collect()
+}
+
+/// Takes over what an existing manifest at `path` says is finished, after checking the
+/// shards; returns how many owned sequences are kept. Refuses a manifest of another
+/// plan. Removes temporary files that killed runs left for owned sequences.
+fn resume(
+    manifest: &mut Manifest,
+    path: &Path,
+    out: &Path,
+    owns: &dyn Fn(usize) -> bool,
+) -> Result<usize, DataError> {
+    for s in manifest.sequences.iter().filter(|s| owns(s.index)) {
+        for rel in [&s.shard, &s.stats] {
+            remove_temp_files(&out.join(rel))?;
+        }
+    }
+    if !path.exists() {
+        return Ok(0);
+    }
+    let old = Manifest::read(path)?;
+    let same_plan = old.config == manifest.config
+        && old.seed == manifest.seed
+        && old.body_model == manifest.body_model
+        && old.job == manifest.job
+        && old.garments == manifest.garments
+        && old.bodies == manifest.bodies
+        && old.motions == manifest.motions
+        && old.sequences.len() == manifest.sequences.len()
+        && old
+            .sequences
+            .iter()
+            .zip(&manifest.sequences)
+            .all(|(a, b)| a.id == b.id);
+    if !same_plan {
+        return Err(DataError::Conflict {
+            path: path.to_path_buf(),
+            message: "the directory holds a dataset generated from another config, seed, body model or --shard split; use a new directory (or delete this one) to generate this config".into(),
+        });
+    }
+    let mut kept = 0;
+    for (new, old) in manifest.sequences.iter_mut().zip(old.sequences) {
+        if !owns(new.index) {
+            continue;
+        }
+        let keep = match old.status {
+            Status::Done | Status::Diverged if old.frames > 0 => {
+                shard::check(&out.join(&old.shard), shape_of(&old)).is_ok()
+                    && out.join(&old.stats).is_file()
+            }
+            // A sequence that diverged on its first frame has no shard: nothing to check.
+            Status::Diverged => true,
+            Status::Pending | Status::Done | Status::Failed => false,
+        };
+        if keep {
+            *new = old;
+            kept += 1;
+        }
+    }
+    Ok(kept)
+}
+
+/// Removes `.NAME.*.tmp` files beside `path` (what `write_atomic` leaves when killed).
+fn remove_temp_files(path: &Path) -> Result<(), DataError> {
+    let (Some(dir), Some(name)) = (path.parent(), path.file_name().and_then(|n| n.to_str())) else {
+        return Ok(());
+    };
+    let prefix = format!(".{name}.");
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(DataError::io(dir, "cannot list the directory", e)),
+    };
+    for entry in entries.filter_map(Result::ok) {
+        let file = entry.file_name();
+        let Some(file) = file.to_str() else { continue };
+        if file.starts_with(&prefix) && file.ends_with(".tmp") {
+            let p = entry.path();
+            std::fs::remove_file(&p)
+                .map_err(|e| DataError::io(&p, "cannot remove a stale temporary file", e))?;
+        }
+    }
+    Ok(())
+}
+
+/// A garment's template on the zero shape.
+fn build_garment(g: &GarmentRecord, fit: &FitBody) -> Result<Garment, DataError> {
+    let kind = GarmentKind::parse(&g.kind).map_err(|source| DataError::Garment {
+        id: g.id.clone(),
+        source: Box::new(source),
+    })?;
+    let style = Style::from_seed(kind, g.seed);
+    fit.generate(kind, &style, g.target_vertices)
+        .map_err(|source| DataError::Garment {
+            id: g.id.clone(),
+            source: Box::new(source),
+        })
+}
+
+/// Writes `garments/<id>.obj` (fitted to β = 0) for garments that have none yet.
+fn write_garment_templates(
+    garments: &[GarmentRecord],
+    model: &BodyModel,
+    out: &Path,
+) -> Result<(), DataError> {
+    let missing: Vec<&GarmentRecord> = garments
+        .iter()
+        .filter(|g| !out.join(&g.file).is_file())
+        .collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    let zero = FitBody::new(model, &vec![0.0; model.num_betas()]).map_err(|source| {
+        DataError::Garment {
+            id: "(zero-shape fit)".into(),
+            source: Box::new(source),
+        }
+    })?;
+    missing.par_iter().try_for_each(|g| {
+        let garment = build_garment(g, &zero)?;
+        weft_garment::obj::write_obj(&out.join(&g.file), &garment).map_err(|source| {
+            DataError::Garment {
+                id: g.id.clone(),
+                source: Box::new(source),
+            }
+        })
+    })
+}
+
+/// The motion of a record at the dataset's frame rate, cut to its frames.
+fn build_motion(record: &MotionRecord, fps: f64, model: &BodyModel) -> Result<Motion, DataError> {
+    let err = |source| DataError::Motion {
+        id: record.id.clone(),
+        source: Box::new(source),
+    };
+    match &record.origin {
+        MotionOrigin::Procedural {
+            kind,
+            seed,
+            speed,
+            amplitude,
+        } => {
+            let kind = MotionKind::parse(kind).ok_or_else(|| {
+                DataError::config(format!("motion {}", record.id), format!("kind {kind:?}"))
+            })?;
+            let params = ProceduralParams {
+                kind,
+                frames: record.frames.unwrap_or(1),
+                fps,
+                seed: *seed,
+                speed: *speed,
+                amplitude: *amplitude,
+            };
+            procedural_motion(&params).map_err(err)
+        }
+        MotionOrigin::File { path, start } => {
+            let rest = model
+                .joints(&vec![0.0; model.num_betas()])
+                .map_err(|source| DataError::Body {
+                    what: "joints of the zero shape".into(),
+                    source: Box::new(source),
+                })?;
+            let mut options = MotionFileOptions::default();
+            for (slot, j) in options.rest_joints.iter_mut().zip(&rest) {
+                *slot = *j;
+            }
+            let (motion, _) = read_motion(Path::new(path), &options).map_err(err)?;
+            let motion = resample(&motion, fps).map_err(err)?;
+            let available = motion.frame_count();
+            let end = record.frames.map_or(available, |f| start + f);
+            if *start >= available || end > available {
+                return Err(DataError::config(
+                    format!("motion {} ({path})", record.id),
+                    format!(
+                        "frames {start}..{end} requested; the file has {available} frames at {fps} fps"
+                    ),
+                ));
+            }
+            Motion::new(
+                fps,
+                motion.poses()[*start..end].to_vec(),
+                motion.trans()[*start..end].to_vec(),
+                None,
+            )
+            .map_err(err)
+        }
+    }
+}
+
+/// One sequence's result: its new record and the frames simulated.
+struct SequenceResult {
+    record: SequenceRecord,
+    frames: usize,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_sequence(
+    record: &SequenceRecord,
+    manifest: &Manifest,
+    config: &DataConfig,
+    model: &BodyModel,
+    motions: &BTreeMap<String, Result<Motion, String>>,
+    fits: &BTreeMap<String, Result<FitBody, String>>,
+    out: &Path,
+    simulator: &dyn SequenceSimulator,
+    progress: &dyn Progress,
+) -> Result<SequenceResult, DataError> {
+    let mut r = record.clone();
+    let fail = |mut r: SequenceRecord, why: String| {
+        r.status = Status::Failed;
+        r.message = Some(why);
+        r.frames = 0;
+        Ok(SequenceResult {
+            record: r,
+            frames: 0,
+        })
+    };
+    let motion = match motions.get(&r.motion_id) {
+        Some(Ok(m)) => m,
+        Some(Err(e)) => return fail(r, e.clone()),
+        None => return fail(r, format!("motion {} was not built", record.motion_id)),
+    };
+    let fit = match fits.get(&r.body_id) {
+        Some(Ok(f)) => f,
+        Some(Err(e)) => return fail(r, format!("fitting to body {}: {e}", record.body_id)),
+        None => return fail(r, format!("body {} was not fitted", record.body_id)),
+    };
+    let Some(g) = manifest.garments.iter().find(|g| g.id == r.garment_id) else {
+        return fail(r, format!("garment {} is not listed", record.garment_id));
+    };
+    let garment = match build_garment(g, fit) {
+        Ok(g) => g,
+        Err(e) => return fail(r, error_chain(&e)),
+    };
+    let material = match Material::preset(&r.material) {
+        Ok(m) => m,
+        Err(e) => return fail(r, e.to_string()),
+    };
+    let betas = betas_f64(&r.betas);
+    let input = SimInput {
+        garment: &garment.mesh,
+        material: &material,
+        body: model,
+        betas: &betas,
+        motion,
+        substeps: config.substeps,
+        warmup_frames: config.warmup_frames,
+    };
+    let outcome = match simulator.simulate(&input, &mut || progress.frame()) {
+        Ok(o) => o,
+        Err(e) => return fail(r, e),
+    };
+    let (frames, stats) = match outcome {
+        SimOutcome::Finished { frames, stats } => {
+            r.status = Status::Done;
+            r.diverged_at = None;
+            r.message = None;
+            (frames, stats)
+        }
+        SimOutcome::Diverged {
+            frame,
+            message,
+            frames,
+            stats,
+        } => {
+            r.status = Status::Diverged;
+            r.diverged_at = Some(frame);
+            r.message = Some(message);
+            (frames, stats)
+        }
+    };
+    let t = frames.len();
+    let wanted = r.frame_range[1] - r.frame_range[0];
+    if r.status == Status::Done && t != wanted {
+        return fail(
+            r,
+            format!("the simulator returned {t} frames; expected {wanted}"),
+        );
+    }
+    r.vertices = garment.mesh.vertex_count();
+    r.faces = garment.mesh.face_count();
+    r.frames = t;
+    if t > 0 {
+        let data = ShardData {
+            positions: frames,
+            poses: motion.poses()[..t]
+                .iter()
+                .map(|p| {
+                    let mut flat = [0.0f32; POSE_VALUES];
+                    for (dst, src) in flat.chunks_exact_mut(3).zip(p) {
+                        dst.copy_from_slice(src);
+                    }
+                    flat
+                })
+                .collect(),
+            trans: motion.trans()[..t].to_vec(),
+            betas: r.betas.clone(),
+            rest_positions: garment
+                .mesh
+                .positions
+                .iter()
+                .map(|p| p.map(|c| c as f32))
+                .collect(),
+            faces: garment.mesh.faces.clone(),
+            corner_uvs: garment
+                .corner_uvs
+                .iter()
+                .map(|c| c.map(|uv| uv.map(|x| x as f32)))
+                .collect(),
+        };
+        shard::write(&out.join(&r.shard), &r.id, &data)?;
+    }
+    let stats_path = out.join(&r.stats);
+    let mut text = serde_json::to_string_pretty(&stats).unwrap_or_else(|_| "null".into());
+    text.push('\n');
+    weft_mesh::io::write_atomic(&stats_path, |w| w.write_all(text.as_bytes()))
+        .map_err(|e| DataError::io(&stats_path, "cannot write the frame statistics", e))?;
+    Ok(SequenceResult {
+        record: r,
+        frames: t,
+    })
+}

@@ -1,0 +1,412 @@
+//! From a config to the list of sequences: ids, derived seeds, drawn body shapes, the
+//! garment × body × motion assignment, and the no-overlap check of seed 000 §4.
+//!
+//! Everything here is a pure function of the config and the seed, so every
+//! `--shard i/n` job and every resumed run computes the same plan, and sequence `index`
+//! means the same sequence everywhere.
+
+use weft_body::motion::MotionKind;
+use weft_garment::rng::SplitMix64;
+
+use crate::config::{DataConfig, FORMAT_VERSION};
+use crate::error::DataError;
+use crate::manifest::{
+    garment_path, shard_path, stats_path, BodyRecord, GarmentRecord, Manifest, MotionOrigin,
+    MotionRecord, SequenceRecord, Status, MANIFEST_FORMAT,
+};
+use crate::split::Split;
+
+/// Streams of derived seeds, one per kind of thing drawn.
+const STREAM_GARMENT: u64 = 1;
+const STREAM_BODY: u64 = 2;
+const STREAM_MOTION: u64 = 3;
+
+/// A seed for item `index` of `stream`, independent of the other streams and items.
+pub fn derive_seed(seed: u64, stream: u64, index: u64) -> u64 {
+    let mut r = SplitMix64::new(
+        seed ^ stream.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+            ^ index.wrapping_mul(0xd1b5_4a32_d192_ed03),
+    );
+    r.next_u64()
+}
+
+/// A standard normal draw (Box–Muller; the first of the pair).
+fn normal(r: &mut SplitMix64) -> f64 {
+    let u1 = 1.0 - r.uniform(0.0, 1.0); // (0, 1]: ln is finite
+    let u2 = r.uniform(0.0, 1.0);
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// A normal draw with standard deviation `sigma`, redrawn until within ±`limit` (a
+/// truncated normal: clamping instead would pile shapes up on the limits, and two
+/// splits could then share one).
+fn truncated_normal(r: &mut SplitMix64, sigma: f64, limit: f64) -> f64 {
+    for _ in 0..10_000 {
+        let x = sigma * normal(r);
+        if x.abs() <= limit {
+            return x;
+        }
+    }
+    // Only reachable for sigma ≫ limit: fall back to a uniform draw.
+    r.uniform(-limit, limit)
+}
+
+/// A motion file's stem as an id part: lowercase letters, digits and '-'.
+fn slug(text: &str) -> String {
+    let s: String = text
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    let s = s.trim_matches('-');
+    if s.is_empty() {
+        "file".into()
+    } else {
+        s.chars().take(32).collect()
+    }
+}
+
+/// The planned manifest of `config`: every garment, body shape, motion and sequence,
+/// all sequences [`Status::Pending`]. `num_betas` is the body model's shape count (β
+/// vectors are padded with zeros to it); `body_model` names the model.
+pub fn plan(
+    config: &DataConfig,
+    num_betas: usize,
+    body_model: &str,
+) -> Result<Manifest, DataError> {
+    config.validate()?;
+    let mut garments = Vec::new();
+    let mut bodies = Vec::new();
+    let mut motions = Vec::new();
+    let mut sequences = Vec::new();
+    for (split_index, split) in Split::ALL.into_iter().enumerate() {
+        let sc = config.split(split);
+        let g0 = garments.len();
+        for spec in &sc.garments {
+            let gi = garments.len();
+            let id = format!("g{gi:03}-{}", spec.kind);
+            garments.push(GarmentRecord {
+                file: garment_path(&id),
+                id,
+                split,
+                kind: spec.kind.clone(),
+                target_vertices: spec.vertices,
+                seed: spec
+                    .seed
+                    .unwrap_or_else(|| derive_seed(config.seed, STREAM_GARMENT, gi as u64)),
+                material: spec
+                    .material
+                    .clone()
+                    .unwrap_or_else(|| config.material.clone()),
+            });
+        }
+        let b0 = bodies.len();
+        let mut shapes: Vec<Vec<f32>> = Vec::new();
+        for (i, b) in sc.betas.iter().enumerate() {
+            if b.len() > num_betas {
+                return Err(DataError::config(
+                    format!("{split}.betas[{i}]"),
+                    format!(
+                        "{} values; the body model has {num_betas} shape components",
+                        b.len()
+                    ),
+                ));
+            }
+            let mut betas: Vec<f32> = b.iter().map(|&x| x as f32).collect();
+            betas.resize(num_betas, 0.0);
+            shapes.push(betas);
+        }
+        // One normal stream per split: adding a validation body never changes the train
+        // shapes.
+        let mut rng = SplitMix64::new(derive_seed(config.seed, STREAM_BODY, split_index as u64));
+        let components = config.beta_components.min(num_betas);
+        for _ in 0..sc.random_bodies {
+            let mut betas = vec![0.0f32; num_betas];
+            for b in betas.iter_mut().take(components) {
+                *b = truncated_normal(&mut rng, config.beta_sigma, config.beta_limit) as f32;
+            }
+            shapes.push(betas);
+        }
+        for (i, betas) in shapes.into_iter().enumerate() {
+            bodies.push(BodyRecord {
+                id: format!("b{:03}", b0 + i),
+                split,
+                betas,
+            });
+        }
+        let m0 = motions.len();
+        for spec in &sc.motions {
+            let mi = motions.len();
+            let (origin, name, frames) = match (&spec.kind, &spec.file) {
+                (Some(kind), _) => {
+                    let k = MotionKind::parse(kind).ok_or_else(|| {
+                        DataError::config(format!("{split}.motions"), format!("kind {kind:?}"))
+                    })?;
+                    (
+                        MotionOrigin::Procedural {
+                            kind: k.name().to_string(),
+                            seed: spec.seed.unwrap_or_else(|| {
+                                derive_seed(config.seed, STREAM_MOTION, mi as u64)
+                            }),
+                            speed: spec.speed,
+                            amplitude: spec.amplitude.unwrap_or(1.0),
+                        },
+                        k.name().to_string(),
+                        Some(spec.frames.unwrap_or(config.frames)),
+                    )
+                }
+                (None, Some(file)) => (
+                    MotionOrigin::File {
+                        path: file.display().to_string(),
+                        start: spec.start,
+                    },
+                    slug(
+                        &file
+                            .file_stem()
+                            .map(|s| s.to_string_lossy().into_owned())
+                            .unwrap_or_default(),
+                    ),
+                    spec.frames,
+                ),
+                (None, None) => {
+                    return Err(DataError::config(
+                        format!("{split}.motions"),
+                        "a motion names neither kind nor file",
+                    ))
+                }
+            };
+            motions.push(MotionRecord {
+                id: format!("m{mi:03}-{name}"),
+                split,
+                origin,
+                frames,
+            });
+        }
+        // Garment-major pairs; pair p takes motions p·k, p·k+1, … (mod M), so consecutive
+        // pairs see different motions and every motion is used about equally.
+        let here_motions = &motions[m0..];
+        let m = here_motions.len();
+        let k = if sc.motions_per_pair == 0 {
+            m
+        } else {
+            sc.motions_per_pair.min(m)
+        };
+        let mut pair = 0usize;
+        for g in &garments[g0..] {
+            for b in &bodies[b0..] {
+                for j in 0..k {
+                    let mo = &here_motions[(pair * k + j) % m];
+                    let id = format!("{split}-{}-{}-{}", g.id, b.id, mo.id);
+                    let frames = mo.frames.unwrap_or(0);
+                    let start = match &mo.origin {
+                        MotionOrigin::File { start, .. } => *start,
+                        MotionOrigin::Procedural { .. } => 0,
+                    };
+                    sequences.push(SequenceRecord {
+                        index: sequences.len(),
+                        shard: shard_path(&id),
+                        stats: stats_path(&id),
+                        id,
+                        split,
+                        garment_id: g.id.clone(),
+                        garment_kind: g.kind.clone(),
+                        vertices: 0,
+                        faces: 0,
+                        body_id: b.id.clone(),
+                        betas: b.betas.clone(),
+                        motion_id: mo.id.clone(),
+                        frame_range: [start, start + frames],
+                        material: g.material.clone(),
+                        fps: config.fps,
+                        frames: 0,
+                        status: Status::Pending,
+                        diverged_at: None,
+                        message: None,
+                    });
+                }
+                pair += 1;
+            }
+        }
+    }
+    let manifest = Manifest {
+        format: MANIFEST_FORMAT.into(),
+        version: FORMAT_VERSION,
+        seed: config.seed,
+        body_model: body_model.to_string(),
+        fps: config.fps,
+        job: None,
+        config: config.clone(),
+        garments,
+        bodies,
+        motions,
+        sequences,
+    };
+    check_no_overlap(&manifest)?;
+    Ok(manifest)
+}
+
+/// Seed 000 §4: the splits share no garment, no body shape and no motion. Garments are
+/// the same when kind, vertex count and style seed agree (they would build the same
+/// mesh); shapes when their β agree; motions when kind, seed, speed, amplitude and
+/// length agree, or when they read the same file (any window of it).
+pub fn check_no_overlap(manifest: &Manifest) -> Result<(), DataError> {
+    fn first_clash<T: PartialEq>(items: &[(Split, T, String)]) -> Result<(), DataError> {
+        for (i, (sa, a, name)) in items.iter().enumerate() {
+            for (sb, b, _) in &items[i + 1..] {
+                if sa != sb && a == b {
+                    return Err(DataError::SplitOverlap {
+                        what: name.clone(),
+                        first: sa.name(),
+                        second: sb.name(),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+    let garments: Vec<_> = manifest
+        .garments
+        .iter()
+        .map(|g| {
+            (
+                g.split,
+                (g.kind.clone(), g.target_vertices, g.seed),
+                format!(
+                    "garment {} ({}, {} vertices, seed {})",
+                    g.id, g.kind, g.target_vertices, g.seed
+                ),
+            )
+        })
+        .collect();
+    first_clash(&garments)?;
+    let bodies: Vec<_> = manifest
+        .bodies
+        .iter()
+        .map(|b| {
+            let bits: Vec<u32> = b.betas.iter().map(|x| x.to_bits()).collect();
+            (
+                b.split,
+                bits,
+                format!("body shape {} (β {:?})", b.id, b.betas),
+            )
+        })
+        .collect();
+    first_clash(&bodies)?;
+    let motions: Vec<_> = manifest
+        .motions
+        .iter()
+        .map(|m| {
+            let key = match &m.origin {
+                MotionOrigin::Procedural {
+                    kind,
+                    seed,
+                    speed,
+                    amplitude,
+                } => format!(
+                    "{kind}/{seed}/{:?}/{}/{:?}",
+                    speed.map(f64::to_bits),
+                    amplitude.to_bits(),
+                    m.frames
+                ),
+                MotionOrigin::File { path, .. } => format!("file:{path}"),
+            };
+            (m.split, key, format!("motion {} ({:?})", m.id, m.origin))
+        })
+        .collect();
+    first_clash(&motions)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tiny_plan_ids_are_unique_and_splits_disjoint() {
+        let c = DataConfig::tiny();
+        let m = plan(&c, 10, "test body").unwrap();
+        m.validate(std::path::Path::new("plan")).unwrap();
+        assert_eq!(m.garments.len(), 8);
+        assert!(m.bodies.iter().all(|b| b.betas.len() == 10));
+        // Same plan twice.
+        assert_eq!(plan(&c, 10, "test body").unwrap(), m);
+        // Test contains a garment kind seen in train.
+        let kinds = |s: Split| -> Vec<&str> {
+            m.garments
+                .iter()
+                .filter(|g| g.split == s)
+                .map(|g| g.kind.as_str())
+                .collect()
+        };
+        assert!(kinds(Split::Test)
+            .iter()
+            .any(|k| kinds(Split::Train).contains(k)));
+    }
+
+    #[test]
+    fn round_robin_uses_every_motion() {
+        let c = DataConfig::tiny();
+        let m = plan(&c, 10, "b").unwrap();
+        let train: Vec<_> = m.sequences_in(Split::Train).collect();
+        assert_eq!(
+            train.len(),
+            c.train.garments.len() * c.train.betas.len() * c.train.motions_per_pair
+        );
+        for mo in m.motions.iter().filter(|x| x.split == Split::Train) {
+            assert!(
+                train.iter().any(|s| s.motion_id == mo.id),
+                "{} unused",
+                mo.id
+            );
+        }
+    }
+
+    #[test]
+    fn overlapping_splits_are_refused() {
+        let mut c = DataConfig::tiny();
+        c.test.garments[0] = c.train.garments[0].clone();
+        let err = plan(&c, 10, "b").unwrap_err().to_string();
+        assert!(
+            err.contains("garment") && err.contains("train") && err.contains("test"),
+            "{err}"
+        );
+
+        let mut c = DataConfig::tiny();
+        c.validation.betas = vec![c.train.betas[1].clone()];
+        let err = plan(&c, 10, "b").unwrap_err().to_string();
+        assert!(err.contains("body shape"), "{err}");
+
+        let mut c = DataConfig::tiny();
+        c.test.motions[0] = c.train.motions[2].clone();
+        let err = plan(&c, 10, "b").unwrap_err().to_string();
+        assert!(err.contains("motion"), "{err}");
+    }
+
+    #[test]
+    fn random_shapes_are_seeded_and_within_the_limit() {
+        let mut c = DataConfig::tiny();
+        c.beta_sigma = 10.0;
+        c.test.random_bodies = 5;
+        let a = plan(&c, 10, "b").unwrap();
+        let b = plan(&c, 10, "b").unwrap();
+        assert_eq!(a.bodies, b.bodies);
+        for body in a.bodies.iter().filter(|b| b.split == Split::Test) {
+            assert!(body.betas[..2].iter().all(|x| x.abs() <= 2.0));
+            assert!(body.betas[2..].iter().all(|&x| x == 0.0));
+        }
+        c.seed = 1;
+        assert_ne!(plan(&c, 10, "b").unwrap().bodies, a.bodies);
+    }
+
+    #[test]
+    fn too_many_betas_name_the_field() {
+        let mut c = DataConfig::tiny();
+        c.train.betas[0] = vec![0.0; 11];
+        let err = plan(&c, 10, "b").unwrap_err().to_string();
+        assert!(err.contains("train.betas[0]"), "{err}");
+    }
+}

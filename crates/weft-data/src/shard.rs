@@ -1,0 +1,390 @@
+//! One sequence per safetensors file.
+//!
+//! Tensors (all little-endian, row-major):
+//!
+//! | name             | dtype | shape     | what                                          |
+//! |------------------|-------|-----------|-----------------------------------------------|
+//! | `positions`      | f32   | [T, N, 3] | simulated garment vertices per frame (m)      |
+//! | `poses`          | f32   | [T, 72]   | SMPL axis-angle pose per frame (24 joints)    |
+//! | `trans`          | f32   | [T, 3]    | root translation per frame (m)                |
+//! | `betas`          | f32   | [B]       | body shape β                                  |
+//! | `rest_positions` | f32   | [N, 3]    | the garment fitted to this body, rest pose    |
+//! | `faces`          | u32   | [F, 3]    | its triangles                                 |
+//! | `corner_uvs`     | f32   | [F, 3, 2] | UV of each face corner (m): the flat pattern  |
+//!
+//! The header's `__metadata__` holds one key, `sequence`, the sequence id, so a shard
+//! moved out of its directory still says what it is. safetensors orders tensors by
+//! dtype and name, and one metadata key serialises one way, so the same data always
+//! gives the same bytes.
+//!
+//! Why safetensors: Python (numpy, torch) reads it without weft, it is a flat header plus
+//! raw arrays (no pickle, no code), and a half-written file fails the header's length
+//! check, which is what resuming relies on.
+
+use std::borrow::Cow;
+use std::collections::HashMap;
+use std::path::Path;
+
+use safetensors::tensor::{Dtype, SafeTensors, View};
+
+use crate::error::DataError;
+
+/// SMPL pose values per frame (24 joints × 3).
+pub const POSE_VALUES: usize = 72;
+
+/// The tensors of one shard.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShardData {
+    /// `[T][N]` garment vertex positions.
+    pub positions: Vec<Vec<[f32; 3]>>,
+    /// `[T]` poses.
+    pub poses: Vec<[f32; POSE_VALUES]>,
+    /// `[T]` root translations.
+    pub trans: Vec<[f32; 3]>,
+    /// `[B]` shape β.
+    pub betas: Vec<f32>,
+    /// `[N]` rest positions of the fitted garment.
+    pub rest_positions: Vec<[f32; 3]>,
+    /// `[F]` triangles.
+    pub faces: Vec<[u32; 3]>,
+    /// `[F]` corner UVs.
+    pub corner_uvs: Vec<[[f32; 2]; 3]>,
+}
+
+/// The shape a shard must have: what the manifest says about it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ShardShape {
+    /// Frames T.
+    pub frames: usize,
+    /// Garment vertices N.
+    pub vertices: usize,
+    /// Garment faces F.
+    pub faces: usize,
+    /// Shape components B.
+    pub betas: usize,
+}
+
+impl ShardData {
+    /// Its shape (T from `poses`, N from `rest_positions`).
+    pub fn shape(&self) -> ShardShape {
+        ShardShape {
+            frames: self.poses.len(),
+            vertices: self.rest_positions.len(),
+            faces: self.faces.len(),
+            betas: self.betas.len(),
+        }
+    }
+}
+
+/// A tensor to write: dtype, shape and little-endian bytes.
+struct Tensor {
+    dtype: Dtype,
+    shape: Vec<usize>,
+    bytes: Vec<u8>,
+}
+
+impl View for &Tensor {
+    fn dtype(&self) -> Dtype {
+        self.dtype
+    }
+    fn shape(&self) -> &[usize] {
+        &self.shape
+    }
+    fn data(&self) -> Cow<'_, [u8]> {
+        Cow::Borrowed(&self.bytes)
+    }
+    fn data_len(&self) -> usize {
+        self.bytes.len()
+    }
+}
+
+fn f32_tensor<'a>(shape: Vec<usize>, values: impl Iterator<Item = &'a f32>) -> Tensor {
+    Tensor {
+        dtype: Dtype::F32,
+        shape,
+        bytes: values.flat_map(|x| x.to_le_bytes()).collect(),
+    }
+}
+
+/// The shard's bytes.
+pub fn encode(sequence_id: &str, data: &ShardData) -> Result<Vec<u8>, DataError> {
+    let s = data.shape();
+    let (t, n, f) = (s.frames, s.vertices, s.faces);
+    if data.positions.len() != t || data.trans.len() != t {
+        return Err(DataError::Simulation {
+            id: sequence_id.to_string(),
+            message: format!(
+                "{} position frames and {} translations for {t} poses; expected one of each per frame",
+                data.positions.len(),
+                data.trans.len()
+            ),
+        });
+    }
+    if let Some(bad) = data.positions.iter().position(|p| p.len() != n) {
+        return Err(DataError::Simulation {
+            id: sequence_id.to_string(),
+            message: format!(
+                "frame {bad} has {} vertices; the garment has {n}",
+                data.positions[bad].len()
+            ),
+        });
+    }
+    if data.corner_uvs.len() != f {
+        return Err(DataError::Simulation {
+            id: sequence_id.to_string(),
+            message: format!("{} corner UV rows for {f} faces", data.corner_uvs.len()),
+        });
+    }
+    let tensors = [
+        (
+            "positions",
+            f32_tensor(vec![t, n, 3], data.positions.iter().flatten().flatten()),
+        ),
+        (
+            "poses",
+            f32_tensor(vec![t, POSE_VALUES], data.poses.iter().flatten()),
+        ),
+        ("trans", f32_tensor(vec![t, 3], data.trans.iter().flatten())),
+        ("betas", f32_tensor(vec![s.betas], data.betas.iter())),
+        (
+            "rest_positions",
+            f32_tensor(vec![n, 3], data.rest_positions.iter().flatten()),
+        ),
+        (
+            "faces",
+            Tensor {
+                dtype: Dtype::U32,
+                shape: vec![f, 3],
+                bytes: data
+                    .faces
+                    .iter()
+                    .flatten()
+                    .flat_map(|x| x.to_le_bytes())
+                    .collect(),
+            },
+        ),
+        (
+            "corner_uvs",
+            f32_tensor(vec![f, 3, 2], data.corner_uvs.iter().flatten().flatten()),
+        ),
+    ];
+    let metadata = HashMap::from([("sequence".to_string(), sequence_id.to_string())]);
+    safetensors::tensor::serialize(tensors.iter().map(|(k, v)| (*k, v)), Some(metadata)).map_err(
+        |e| DataError::Simulation {
+            id: sequence_id.to_string(),
+            message: format!("cannot encode the shard: {e}"),
+        },
+    )
+}
+
+/// Writes a shard atomically (temporary file, then rename): a killed run leaves either
+/// the old file, no file, or a stray temporary file, never a torn shard.
+pub fn write(path: &Path, sequence_id: &str, data: &ShardData) -> Result<(), DataError> {
+    let bytes = encode(sequence_id, data)?;
+    weft_mesh::io::write_atomic(path, |w| w.write_all(&bytes))
+        .map_err(|e| DataError::io(path, "cannot write the shard", e))
+}
+
+/// Reads a shard and checks every tensor against `expected`; errors name the file, the
+/// tensor and the expected dtype and shape.
+pub fn read(path: &Path, expected: ShardShape) -> Result<ShardData, DataError> {
+    let bytes = std::fs::read(path).map_err(|e| DataError::io(path, "cannot read the shard", e))?;
+    decode(path, &bytes, expected)
+}
+
+/// Checks a shard's header and tensor shapes without converting the arrays: what a
+/// resumed run does to decide whether a shard is finished.
+pub fn check(path: &Path, expected: ShardShape) -> Result<(), DataError> {
+    let bytes = std::fs::read(path).map_err(|e| DataError::io(path, "cannot read the shard", e))?;
+    let st = parse(path, &bytes)?;
+    for (name, dtype, shape) in layout(expected) {
+        tensor(path, &st, name, dtype, &shape)?;
+    }
+    Ok(())
+}
+
+fn parse<'a>(path: &Path, bytes: &'a [u8]) -> Result<SafeTensors<'a>, DataError> {
+    SafeTensors::deserialize(bytes).map_err(|e| DataError::Shard {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })
+}
+
+fn layout(e: ShardShape) -> [(&'static str, Dtype, Vec<usize>); 7] {
+    let (t, n, f) = (e.frames, e.vertices, e.faces);
+    [
+        ("positions", Dtype::F32, vec![t, n, 3]),
+        ("poses", Dtype::F32, vec![t, POSE_VALUES]),
+        ("trans", Dtype::F32, vec![t, 3]),
+        ("betas", Dtype::F32, vec![e.betas]),
+        ("rest_positions", Dtype::F32, vec![n, 3]),
+        ("faces", Dtype::U32, vec![f, 3]),
+        ("corner_uvs", Dtype::F32, vec![f, 3, 2]),
+    ]
+}
+
+fn describe(dtype: Dtype, shape: &[usize]) -> String {
+    format!("{} {shape:?}", format!("{dtype:?}").to_lowercase())
+}
+
+/// The bytes of tensor `name`, after checking its dtype and shape.
+fn tensor<'a>(
+    path: &Path,
+    st: &SafeTensors<'a>,
+    name: &str,
+    dtype: Dtype,
+    shape: &[usize],
+) -> Result<&'a [u8], DataError> {
+    let err = |found: String| DataError::Tensor {
+        path: path.to_path_buf(),
+        tensor: name.to_string(),
+        expected: describe(dtype, shape),
+        found,
+    };
+    let view = st.tensor(name).map_err(|_| err("missing".into()))?;
+    if view.dtype() != dtype || view.shape() != shape {
+        return Err(err(describe(view.dtype(), view.shape())));
+    }
+    Ok(view.data())
+}
+
+fn f32s(bytes: &[u8]) -> impl Iterator<Item = f32> + '_ {
+    bytes
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+}
+
+fn triples(bytes: &[u8]) -> Vec<[f32; 3]> {
+    let v: Vec<f32> = f32s(bytes).collect();
+    v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+/// Decodes shard bytes (see [`read`]).
+pub fn decode(path: &Path, bytes: &[u8], expected: ShardShape) -> Result<ShardData, DataError> {
+    let st = parse(path, bytes)?;
+    let [positions, poses, trans, betas, rest, faces, uvs] = layout(expected);
+    let get =
+        |(name, dtype, shape): (&str, Dtype, Vec<usize>)| tensor(path, &st, name, dtype, &shape);
+    let positions_b = get(positions)?;
+    let poses_b = get(poses)?;
+    let trans_b = get(trans)?;
+    let betas_b = get(betas)?;
+    let rest_b = get(rest)?;
+    let faces_b = get(faces)?;
+    let uvs_b = get(uvs)?;
+    let n = expected.vertices;
+    let all = triples(positions_b);
+    let positions = if n == 0 {
+        vec![Vec::new(); expected.frames]
+    } else {
+        all.chunks_exact(n).map(<[_]>::to_vec).collect()
+    };
+    let pose_values: Vec<f32> = f32s(poses_b).collect();
+    let poses = pose_values
+        .chunks_exact(POSE_VALUES)
+        .map(|c| {
+            let mut p = [0.0f32; POSE_VALUES];
+            p.copy_from_slice(c);
+            p
+        })
+        .collect();
+    let face_values: Vec<u32> = faces_b
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    let faces: Vec<[u32; 3]> = face_values
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    if let Some((i, f)) = faces
+        .iter()
+        .enumerate()
+        .find(|(_, f)| f.iter().any(|&v| v as usize >= n))
+    {
+        return Err(DataError::Tensor {
+            path: path.to_path_buf(),
+            tensor: "faces".into(),
+            expected: format!("vertex indices below {n}"),
+            found: format!("face {i} = {f:?}"),
+        });
+    }
+    let uv_values: Vec<f32> = f32s(uvs_b).collect();
+    let corner_uvs = uv_values
+        .chunks_exact(6)
+        .map(|c| [[c[0], c[1]], [c[2], c[3]], [c[4], c[5]]])
+        .collect();
+    Ok(ShardData {
+        positions,
+        poses,
+        trans: triples(trans_b),
+        betas: f32s(betas_b).collect(),
+        rest_positions: triples(rest_b),
+        faces,
+        corner_uvs,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> ShardData {
+        ShardData {
+            positions: vec![
+                vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.5]],
+                vec![[0.0, -0.1, 0.0], [1.0, -0.1, 0.0], [0.0, 0.9, 0.5]],
+            ],
+            poses: vec![[0.1; POSE_VALUES], [0.2; POSE_VALUES]],
+            trans: vec![[0.0, 0.9, 0.0], [0.0, 0.9, 0.1]],
+            betas: vec![1.0, -0.5, 0.0],
+            rest_positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.5]],
+            faces: vec![[0, 1, 2]],
+            corner_uvs: vec![[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]],
+        }
+    }
+
+    #[test]
+    fn round_trip_and_deterministic_bytes() {
+        let d = sample();
+        let a = encode("s", &d).unwrap();
+        assert_eq!(a, encode("s", &d).unwrap());
+        let back = decode(Path::new("s.safetensors"), &a, d.shape()).unwrap();
+        assert_eq!(back, d);
+    }
+
+    #[test]
+    fn wrong_shapes_name_file_tensor_and_expectation() {
+        let d = sample();
+        let bytes = encode("s", &d).unwrap();
+        let mut e = d.shape();
+        e.vertices = 4;
+        let err = decode(Path::new("x.safetensors"), &bytes, e)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("x.safetensors"), "{err}");
+        assert!(err.contains("\"positions\""), "{err}");
+        assert!(err.contains("f32 [2, 4, 3]"), "{err}");
+        assert!(err.contains("[2, 3, 3]"), "{err}");
+    }
+
+    #[test]
+    fn truncated_shards_are_rejected() {
+        let d = sample();
+        let bytes = encode("s", &d).unwrap();
+        for cut in [0, 7, 20, bytes.len() - 1] {
+            let err = decode(Path::new("t.safetensors"), &bytes[..cut], d.shape()).unwrap_err();
+            assert!(matches!(err, DataError::Shard { .. }), "cut {cut}: {err}");
+        }
+    }
+
+    #[test]
+    fn out_of_range_faces_are_rejected() {
+        let mut d = sample();
+        d.faces[0][2] = 3;
+        let bytes = encode("s", &d).unwrap();
+        let err = decode(Path::new("f.safetensors"), &bytes, d.shape())
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("faces"), "{err}");
+    }
+}
