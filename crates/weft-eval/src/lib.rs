@@ -4,6 +4,8 @@
 //!
 //! - [`metrics`]: `E_verts` (mm), `E_norm` (°), collision rate, edge strain.
 //! - [`baseline`]: the LBS-only baseline (transferred body skinning weights).
+//! - [`report`]: `eval.json` / `eval.md` and the Table 1 comparison.
+//! - [`pictures`]: comparison sheets, error and attribution heat maps, per-frame plots.
 //! - [`stats`]: mean ± std in one pass.
 //! - [`quadrature`], [`attribution`]: eq. 9, Aumann–Shapley path integrals with
 //!   Gauss–Legendre quadrature.
@@ -12,10 +14,13 @@ pub mod attribution;
 pub mod baseline;
 pub mod error;
 pub mod metrics;
+pub mod pictures;
 pub mod quadrature;
+pub mod report;
 pub mod stats;
 
 pub use baseline::{LbsBaseline, PosedBodies};
 pub use error::EvalError;
 pub use metrics::{FrameMetrics, GarmentTopology, MetricsSummary};
+pub use report::{Comparison, EvalReport, MethodResult, LBS_NAME};
 pub use stats::{Accumulator, Summary};
