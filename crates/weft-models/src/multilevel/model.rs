@@ -196,13 +196,36 @@ impl Multilevel {
 
     /// `X^fuse` of a garment–body pair (eq. 4–5); compute once, reuse for every window.
     pub fn encode_pair(&self, g: &GarmentInput) -> Result<PairEncoding, ModelError> {
+        let x = tensor2(
+            &g.node_features,
+            [g.vertex_count(), self.config.node_features()],
+            &self.device(),
+        );
+        self.encode_pair_features(g, x)
+    }
+
+    /// [`Self::encode_pair`] with the garment graph's node features `X` (`[N, 6 + S]`)
+    /// given as a tensor: the attribution of seed 000 §4.1 (weft-eval) differentiates
+    /// the prediction with respect to `X`.
+    pub fn encode_pair_features(
+        &self,
+        g: &GarmentInput,
+        x: Tensor<2>,
+    ) -> Result<PairEncoding, ModelError> {
         self.check_garment(g)?;
         let device = self.device();
         let cfg = &self.config;
         let n = g.vertex_count();
+        if x.dims() != [n, cfg.node_features()] {
+            return Err(ModelError::mismatch(
+                "node feature tensor shape (garment vertices × 6 + joints)",
+                format!("{:?}", [n, cfg.node_features()]),
+                format!("{:?}", x.dims()),
+            ));
+        }
         let batch = g.frame_batch(1)?;
         let adjacency = batch.batch(0).adjacency();
-        let mut x = tensor2(&g.node_features, [n, cfg.node_features()], &device);
+        let mut x = x;
         for block in &self.gg {
             x = block.forward(x, adjacency)?;
         }
