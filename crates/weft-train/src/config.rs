@@ -1,0 +1,164 @@
+//! The training configuration (the `[train]` table of a run's config.toml), with every
+//! default written here and printed by `weft config show`.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Result, TrainError};
+use crate::loss::TermWeights;
+use crate::schedule::ScheduleConfig;
+
+/// Training hyper-parameters; [`TrainConfig::preset`] gives the `cpu` and `paper` ones.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrainConfig {
+    /// Seeds parameter initialisation and the order of the training windows.
+    pub seed: u64,
+    /// Optimiser steps of the whole run.
+    pub steps: usize,
+    /// Initial Adamax learning rate (seed 000 supp. §4: 3e-3).
+    pub learning_rate: f64,
+    /// Final learning rate of the cosine annealing.
+    pub min_learning_rate: f64,
+    /// Consecutive frames per training window (the frames of a window share one pair
+    /// encoding and form one batch for the network).
+    pub window: usize,
+    /// Windows per optimiser step (their losses are averaged).
+    pub batch: usize,
+    /// Write a checkpoint every this many steps (and always at the end).
+    pub checkpoint_every: usize,
+    /// Measure the validation error every this many steps (and at the end); 0: never.
+    pub validate_every: usize,
+    /// At most this many validation windows per measurement (spread over the split).
+    pub validation_windows: usize,
+    /// Stop when this many steps in a row had a non-finite loss.
+    pub max_non_finite: usize,
+    /// Clip gradients to this global L2 norm (none: no clipping; the paper names none).
+    pub grad_clip_norm: Option<f64>,
+    /// Loss weights of supplement §2.
+    pub weights: TermWeights,
+    /// The two-step schedule of supplement §4.
+    pub schedule: ScheduleConfig,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        TrainConfig {
+            seed: 0,
+            steps: 1500,
+            learning_rate: 3e-3,
+            min_learning_rate: 3e-5,
+            window: 8,
+            batch: 1,
+            checkpoint_every: 250,
+            validate_every: 250,
+            validation_windows: 12,
+            max_non_finite: 20,
+            grad_clip_norm: None,
+            weights: TermWeights::default(),
+            schedule: ScheduleConfig::default(),
+        }
+    }
+}
+
+/// The preset names [`TrainConfig::preset`] knows.
+pub const PRESETS: [&str; 2] = ["cpu", "paper"];
+
+impl TrainConfig {
+    /// The training side of a preset: `cpu` (the default above: short windows, one per
+    /// step, sized to train the tiny dataset in minutes on two cores) or `paper` (batch
+    /// 64 frames as 4 windows of 16, seed 000 supp. §4, and a longer run).
+    pub fn preset(name: &str) -> Result<Self> {
+        match name {
+            "cpu" => Ok(TrainConfig::default()),
+            "paper" => Ok(TrainConfig {
+                steps: 20_000,
+                window: 16,
+                batch: 4,
+                checkpoint_every: 1000,
+                validate_every: 1000,
+                validation_windows: 64,
+                ..TrainConfig::default()
+            }),
+            other => Err(TrainError::config(
+                "preset",
+                other,
+                &format!("one of {}", PRESETS.join(", ")),
+            )),
+        }
+    }
+
+    /// Checks every range; errors name the field as in config.toml.
+    pub fn validate(&self) -> Result<()> {
+        for (field, v) in [
+            ("train.steps", self.steps),
+            ("train.window", self.window),
+            ("train.batch", self.batch),
+            ("train.checkpoint_every", self.checkpoint_every),
+            ("train.max_non_finite", self.max_non_finite),
+        ] {
+            if v == 0 {
+                return Err(TrainError::config(field, v, "at least 1"));
+            }
+        }
+        if !(self.learning_rate.is_finite() && self.learning_rate > 0.0) {
+            return Err(TrainError::config(
+                "train.learning_rate",
+                self.learning_rate,
+                "a finite rate > 0",
+            ));
+        }
+        if !(self.min_learning_rate.is_finite()
+            && self.min_learning_rate >= 0.0
+            && self.min_learning_rate <= self.learning_rate)
+        {
+            return Err(TrainError::config(
+                "train.min_learning_rate",
+                self.min_learning_rate,
+                "a finite rate in [0, learning_rate]",
+            ));
+        }
+        if let Some(c) = self.grad_clip_norm {
+            if !(c.is_finite() && c > 0.0) {
+                return Err(TrainError::config(
+                    "train.grad_clip_norm",
+                    c,
+                    "a finite norm > 0",
+                ));
+            }
+        }
+        self.weights.validate()?;
+        self.schedule.validate()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_validate_and_round_trip_through_toml() {
+        for name in PRESETS {
+            let c = TrainConfig::preset(name).unwrap();
+            c.validate().unwrap();
+            let text = toml::to_string(&c).unwrap();
+            let back: TrainConfig = toml::from_str(&text).unwrap();
+            assert_eq!(back, c);
+        }
+        assert!(TrainConfig::preset("gpu").is_err());
+        // Missing fields take their defaults; unknown ones are refused.
+        let partial: TrainConfig = toml::from_str("steps = 7\n[weights]\nvertex = 2.0\n").unwrap();
+        assert_eq!(partial.steps, 7);
+        assert_eq!(partial.weights.vertex, 2.0);
+        assert_eq!(partial.weights.edge, 15.0);
+        assert!(toml::from_str::<TrainConfig>("stepz = 7\n").is_err());
+        let bad = TrainConfig {
+            min_learning_rate: 1.0,
+            ..TrainConfig::default()
+        };
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("train.min_learning_rate"));
+    }
+}
