@@ -245,8 +245,28 @@ impl MultilevelConfig {
 
     /// A config from TOML; missing fields take their defaults (the `cpu` preset's).
     pub fn from_toml(text: &str) -> Result<Self, ModelError> {
-        let cfg: Self =
+        let table: toml::Table =
             toml::from_str(text).map_err(|e| ModelError::Config(format!("from TOML: {e}")))?;
+        Self::from_table(table)
+    }
+
+    /// A config from a parsed TOML table (the `[model]` table of a run's config.toml):
+    /// missing fields take their defaults, unknown fields are refused by name.
+    pub fn from_table(table: toml::Table) -> Result<Self, ModelError> {
+        let mut merged = toml::Table::try_from(Self::cpu())
+            .map_err(|e| ModelError::Config(format!("to TOML: {e}")))?;
+        for (key, value) in table {
+            if !merged.contains_key(&key) {
+                return Err(ModelError::Config(format!(
+                    "unknown field {key:?}; expected one of {}",
+                    merged.keys().cloned().collect::<Vec<_>>().join(", ")
+                )));
+            }
+            merged.insert(key, value);
+        }
+        let cfg: Self = toml::Value::Table(merged)
+            .try_into()
+            .map_err(|e: toml::de::Error| ModelError::Config(e.to_string()))?;
         cfg.validate()?;
         Ok(cfg)
     }

@@ -162,11 +162,10 @@ impl GarmentInput {
         let width = cfg.node_features();
         let mut node_features = Vec::with_capacity(n * width);
         let mut rest = Vec::with_capacity(n * 3);
-        for i in 0..n {
-            let p = garment.positions[i];
+        for (i, (p, normal)) in garment.positions.iter().zip(&normals).enumerate() {
             rest.extend(p.map(|x| x as f32));
             node_features.extend((0..3).map(|k| (p[k] - pelvis[k]) as f32));
-            node_features.extend(normals[i].map(|x| x as f32));
+            node_features.extend(normal.map(|x| x as f32));
             node_features.extend(dist.row(i).iter().map(|&d| d as f32));
         }
 

@@ -65,15 +65,12 @@ pub fn read_run_config(run_dir: &Path) -> Result<MultilevelConfig, ModelError> {
             ))
         }
     }
-    let model = table
-        .get("model")
-        .cloned()
-        .ok_or_else(|| run_err(&path, "no [model] table"))?;
-    let cfg: MultilevelConfig = model
-        .try_into()
-        .map_err(|e: toml::de::Error| run_err(&path, format!("[model]: {e}")))?;
-    cfg.validate()
-        .map_err(|e| run_err(&path, format!("[model]: {e}")))?;
+    let model = match table.get("model") {
+        Some(toml::Value::Table(t)) => t.clone(),
+        _ => return Err(run_err(&path, "no [model] table")),
+    };
+    let cfg =
+        MultilevelConfig::from_table(model).map_err(|e| run_err(&path, format!("[model]: {e}")))?;
     if let Some(preset) = table.get("preset").and_then(toml::Value::as_str) {
         if preset != cfg.preset {
             return Err(run_err(
