@@ -1,6 +1,7 @@
 //! Subcommands, one module each.
 
 mod body;
+mod data;
 mod export;
 mod garment;
 mod mesh;
@@ -29,6 +30,9 @@ pub enum Command {
     Garment(garment::GarmentCommand),
     /// Write a frame sequence as an OBJ sequence, PC2/MDD point cache or glTF binary.
     Export(export::ExportArgs),
+    /// Simulated datasets: generate (resumable, shardable), info, merge.
+    #[command(subcommand)]
+    Data(data::DataCommand),
 }
 
 pub fn run(command: Command) -> anyhow::Result<()> {
@@ -39,6 +43,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Render(a) => render::run(&a),
         Command::Export(a) => export::run(&a),
         Command::Garment(c) => garment::run(c),
+        Command::Data(c) => data::run(c),
     }
 }
 

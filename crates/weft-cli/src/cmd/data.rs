@@ -1,0 +1,125 @@
+//! `weft data generate | info | merge`: simulated datasets (weft-data).
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Subcommand};
+use weft_data::progress::FrameBar;
+use weft_data::{generate, DataConfig, DatasetInfo, GenerateOptions, Job, Physics};
+
+use super::emit;
+
+#[derive(Subcommand)]
+pub enum DataCommand {
+    /// Simulate a dataset (garments × body shapes × motions) into safetensors shards
+    /// and a manifest; resumes an interrupted run in the same directory.
+    Generate(GenerateArgs),
+    /// Summarise a dataset: counts per split, vertex counts, materials, size on disk,
+    /// diverged, failed and missing sequences.
+    Info(InfoArgs),
+    /// Merge the partial manifests of `--shard i/n` jobs into manifest.json.
+    Merge(MergeArgs),
+}
+
+#[derive(Args)]
+pub struct GenerateArgs {
+    /// A built-in config: tiny (minutes on a laptop) or paper (seed 000's proportions).
+    #[arg(long, conflicts_with = "config")]
+    preset: Option<String>,
+    /// A dataset config (TOML); see `--print-config` for every field.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Print the config (the preset's, default tiny) as TOML and exit.
+    #[arg(long)]
+    print_config: bool,
+    /// Override the config's seed.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Output directory.
+    #[arg(long, required_unless_present = "print_config")]
+    out: Option<PathBuf>,
+    /// Generate only sequences with index % n == i (one of n cluster jobs), writing
+    /// manifest.part-i-of-n.json; merge with `weft data merge DIR`.
+    #[arg(long)]
+    shard: Option<String>,
+}
+
+#[derive(Args)]
+pub struct InfoArgs {
+    /// The dataset directory.
+    dir: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The dataset directory the jobs wrote to.
+    dir: PathBuf,
+}
+
+pub fn run(command: DataCommand) -> Result<()> {
+    match command {
+        DataCommand::Generate(a) => run_generate(&a),
+        DataCommand::Info(a) => run_info(&a),
+        DataCommand::Merge(a) => {
+            let path = weft_data::merge_directory(&a.dir)?;
+            emit(&format!("wrote {}", path.display()))
+        }
+    }
+}
+
+fn run_generate(a: &GenerateArgs) -> Result<()> {
+    let mut config = match (&a.config, &a.preset) {
+        (Some(path), _) => DataConfig::load(path)?,
+        (None, Some(name)) => DataConfig::preset(name)?,
+        (None, None) => DataConfig::tiny(),
+    };
+    if let Some(seed) = a.seed {
+        config.seed = seed;
+    }
+    if a.print_config {
+        return emit(&config.to_toml()?);
+    }
+    let Some(out) = &a.out else {
+        bail!("--out DIR is required to generate");
+    };
+    let job = a.shard.as_deref().map(Job::parse).transpose()?;
+    let bar = FrameBar::new();
+    let report = generate(&config, out, &GenerateOptions { job }, &Physics, &bar)
+        .with_context(|| format!("generating the dataset in {}", out.display()))?;
+    let mut text = format!(
+        "{}: {} sequences in this job, {} kept from an earlier run, {} simulated ({} frames in {:.1} s)",
+        report.manifest_path.display(),
+        report.owned,
+        report.kept,
+        report.done + report.diverged.len(),
+        report.frames,
+        report.seconds
+    );
+    for (id, frame) in &report.diverged {
+        text.push_str(&format!("\ndiverged: {id} at frame {frame}"));
+    }
+    for (id, why) in &report.failed {
+        text.push_str(&format!("\nfailed: {id}: {why}"));
+    }
+    emit(&text)?;
+    if !report.failed.is_empty() {
+        bail!(
+            "{} sequences failed (recorded in {})",
+            report.failed.len(),
+            report.manifest_path.display()
+        );
+    }
+    Ok(())
+}
+
+fn run_info(a: &InfoArgs) -> Result<()> {
+    let info = DatasetInfo::of(&a.dir)?;
+    if a.json {
+        emit(&serde_json::to_string_pretty(&info)?)
+    } else {
+        emit(&info.to_string())
+    }
+}
