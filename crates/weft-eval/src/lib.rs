@@ -4,15 +4,21 @@
 //!
 //! - [`metrics`]: `E_verts` (mm), `E_norm` (°), collision rate, edge strain.
 //! - [`baseline`]: the LBS-only baseline (transferred body skinning weights).
+//! - [`evaluate`]: `weft eval` — a run on a dataset split against the baseline.
+//! - [`explain`]: eq. 9 for one vertex of the Multilevel model (`weft attribute`).
+//! - [`animate`]: `weft animate` — any garment, shape and motion, exported.
 //! - [`report`]: `eval.json` / `eval.md` and the Table 1 comparison.
 //! - [`pictures`]: comparison sheets, error and attribution heat maps, per-frame plots.
 //! - [`stats`]: mean ± std in one pass.
 //! - [`quadrature`], [`attribution`]: eq. 9, Aumann–Shapley path integrals with
 //!   Gauss–Legendre quadrature.
 
+pub mod animate;
 pub mod attribution;
 pub mod baseline;
 pub mod error;
+pub mod evaluate;
+pub mod explain;
 pub mod metrics;
 pub mod pictures;
 pub mod quadrature;
@@ -21,6 +27,7 @@ pub mod stats;
 
 pub use baseline::{LbsBaseline, PosedBodies};
 pub use error::EvalError;
+pub use evaluate::{evaluate, write_report, EvalOptions, Evaluation};
 pub use metrics::{FrameMetrics, GarmentTopology, MetricsSummary};
 pub use report::{Comparison, EvalReport, MethodResult, LBS_NAME};
 pub use stats::{Accumulator, Summary};

@@ -294,7 +294,7 @@ pub fn pooling_label(pooling: &str) -> String {
     match pooling {
         "structure" => "Multilevel (structure-preserving)".to_owned(),
         "none" => "Single-level".to_owned(),
-        "topk" => "TopKPool".to_owned(),
+        "top_k" | "topk" => "TopKPool".to_owned(),
         "sag" => "SAGPool".to_owned(),
         "asap" => "ASAP".to_owned(),
         other => other.to_owned(),
@@ -475,7 +475,7 @@ pub(crate) mod tests {
         assert_eq!(rows[1][0], "Single-level");
         assert_eq!(rows[2][0], LBS_NAME);
         assert!(c.to_markdown().contains("25.0 %"));
-        let mut other = report("topk", 1.0, 2.0);
+        let mut other = report("top_k", 1.0, 2.0);
         other.split = "validation".into();
         assert!(Comparison::new(vec![report("none", 1.0, 2.0), other], String::new()).is_err());
         std::fs::remove_dir_all(&dir).ok();

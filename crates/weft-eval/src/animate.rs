@@ -1,0 +1,196 @@
+//! `weft animate`: a trained model drives any garment (unseen topology included) on any
+//! body shape and motion, and the frames are written in a format graphics tools read.
+//!
+//! Motions come from a file (AMASS `.npz`, `.bvh`, read by weft-body with the body's own
+//! rest joints `J(β)` as the retargeting target) or from weft's procedural library by
+//! name. Export goes through weft-mesh's writers (atomic: a failure leaves nothing).
+
+use std::path::Path;
+
+use weft_body::motion::{
+    generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams,
+};
+use weft_body::BodyModel;
+use weft_mesh::export::gltf::{write_glb, GlbMesh, GlbOptions, BODY_COLOR, GARMENT_COLOR};
+use weft_mesh::export::{export, ExportFormat, Frames};
+use weft_mesh::TriMesh;
+use weft_models::multilevel::Predictor;
+
+use crate::error::EvalError;
+
+/// Where a motion comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MotionSpec {
+    /// An AMASS `.npz` or `.bvh` file.
+    File(std::path::PathBuf),
+    /// A procedural motion.
+    Procedural {
+        /// walk, run, jump, dance, …
+        kind: MotionKind,
+        /// Number of frames.
+        frames: usize,
+        /// Seed of its variations.
+        seed: u64,
+        /// Frames per second.
+        fps: f64,
+    },
+}
+
+impl MotionSpec {
+    /// `spec` is an existing file, or a procedural motion name (`walk`, `dance`, …) with
+    /// `frames`, `seed` and `fps`.
+    pub fn parse(spec: &str, frames: usize, seed: u64, fps: f64) -> Result<Self, EvalError> {
+        let path = Path::new(spec);
+        if path.exists() {
+            return Ok(MotionSpec::File(path.to_path_buf()));
+        }
+        match MotionKind::parse(spec) {
+            Some(kind) => Ok(MotionSpec::Procedural {
+                kind,
+                frames,
+                seed,
+                fps,
+            }),
+            None => Err(EvalError::Invalid(format!(
+                "motion {spec:?} is neither an existing .npz/.bvh file nor a procedural motion name (see `weft motion generate --help`)"
+            ))),
+        }
+    }
+
+    /// Reads or generates the motion for `body` at shape `betas`.
+    pub fn load(&self, body: &BodyModel, betas: &[f32]) -> Result<Motion, EvalError> {
+        match self {
+            MotionSpec::File(path) => {
+                let joints =
+                    body.joints(&betas.iter().map(|&b| f64::from(b)).collect::<Vec<_>>())?;
+                let rest_joints: [[f64; 3]; 24] =
+                    joints.try_into().map_err(|j: Vec<[f64; 3]>| {
+                        EvalError::Invalid(format!(
+                            "the body has {} joints; motion files drive SMPL's 24",
+                            j.len()
+                        ))
+                    })?;
+                let options = MotionFileOptions {
+                    rest_joints,
+                    npz_source_pelvis: rest_joints[0],
+                    ..MotionFileOptions::default()
+                };
+                let (m, _) = read_motion(path, &options)
+                    .map_err(|e| EvalError::Invalid(format!("{}: {e}", path.display())))?;
+                Ok(m)
+            }
+            MotionSpec::Procedural {
+                kind,
+                frames,
+                seed,
+                fps,
+            } => {
+                let mut p = ProceduralParams::new(*kind);
+                p.frames = *frames;
+                p.seed = *seed;
+                p.fps = *fps;
+                generate(&p).map_err(|e| EvalError::Invalid(format!("motion {kind}: {e}")))
+            }
+        }
+    }
+}
+
+/// A body to export with the garment: its faces and its vertices per frame.
+pub type BodyFrames<'a> = (&'a [[u32; 3]], &'a [Vec<[f32; 3]>]);
+
+/// A motion's poses as SMPL's flat 72 numbers per frame.
+pub fn flat_poses(motion: &Motion) -> Vec<[f32; 72]> {
+    motion
+        .poses()
+        .iter()
+        .map(|p| {
+            let mut out = [0.0f32; 72];
+            for (j, r) in p.iter().enumerate() {
+                out[3 * j..3 * j + 3].copy_from_slice(r);
+            }
+            out
+        })
+        .collect()
+}
+
+/// The garment animated by `predictor` on `body` at `betas` through `motion`.
+pub fn animate(
+    predictor: &Predictor,
+    garment: &TriMesh,
+    body: &BodyModel,
+    betas: &[f32],
+    motion: &Motion,
+) -> Result<Vec<Vec<[f32; 3]>>, EvalError> {
+    predictor
+        .animate(
+            garment,
+            body,
+            betas,
+            &flat_poses(motion),
+            motion.trans(),
+            motion.fps(),
+        )
+        .map_err(|e| EvalError::Network(e.to_string()))
+}
+
+/// Writes `frames` of `garment` to `out` in `format` at `fps`; for glb, `body` (faces and
+/// frames) is added as a second animated mesh.
+pub fn write_animation(
+    format: ExportFormat,
+    garment: &TriMesh,
+    frames: &[Vec<[f32; 3]>],
+    fps: f64,
+    body: Option<BodyFrames<'_>>,
+    out: &Path,
+) -> Result<(), EvalError> {
+    let export_err = |e: weft_mesh::export::ExportError| EvalError::Invalid(format!("export: {e}"));
+    let g = Frames::from_frames(frames).map_err(export_err)?;
+    match (format, body) {
+        (ExportFormat::Glb, Some((faces, body_frames))) => {
+            let b = Frames::from_frames(body_frames).map_err(export_err)?;
+            g.check_finite().map_err(export_err)?;
+            write_glb(
+                out,
+                &[
+                    GlbMesh {
+                        name: "garment",
+                        faces: &garment.faces,
+                        frames: &g,
+                        color: GARMENT_COLOR,
+                    },
+                    GlbMesh {
+                        name: "body",
+                        faces,
+                        frames: &b,
+                        color: BODY_COLOR,
+                    },
+                ],
+                GlbOptions {
+                    fps: fps as f32,
+                    normals: true,
+                },
+            )
+            .map_err(export_err)
+        }
+        _ => export(format, garment, &g, fps as f32, out).map_err(export_err),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn motion_specs() {
+        let body = weft_body::default_body().unwrap();
+        let m = MotionSpec::parse("walk", 12, 3, 30.0).unwrap();
+        let motion = m.load(&body, &[]).unwrap();
+        assert_eq!(motion.frame_count(), 12);
+        assert_eq!(flat_poses(&motion).len(), 12);
+        assert!(MotionSpec::parse("no-such-motion-or-file", 12, 0, 30.0).is_err());
+        assert!(MotionSpec::parse("walk", 0, 0, 30.0)
+            .unwrap()
+            .load(&body, &[])
+            .is_err());
+    }
+}
