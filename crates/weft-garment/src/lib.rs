@@ -17,6 +17,7 @@ pub mod kind;
 pub mod obj;
 pub mod onbody;
 mod pants;
+pub mod prepare;
 pub mod rng;
 pub mod skirt;
 mod top;

@@ -1,0 +1,27 @@
+//! Garment preparation: getting a garment (a template or any OBJ) ready to be simulated
+//! or skinned on a particular body (issue 4 part 3).
+//!
+//! * [`resize`]: move a garment fitted to shape β0 onto shape β1 of the same body model,
+//!   by the body surface's own displacement between the two shapes, blended over nearby
+//!   body points so loose parts move as one piece, then pushed outside the new body.
+//! * [`drape`]: settle a garment on the rest-pose body with the simulator (push-out of
+//!   penetrations, gravity ramp, stop when still), reporting penetrations before and
+//!   after and the frames used.
+//! * Skinning-weight transfer for any garment positions is [`FitBody::weights_at`];
+//!   [`write_positions_into_obj`] writes new positions into the garment's own OBJ text so
+//!   its UVs, groups and face corners survive preparation.
+//!
+//! [`FitBody::weights_at`]: crate::FitBody::weights_at
+
+pub mod drape;
+pub mod error;
+pub mod objtext;
+pub mod resize;
+
+pub use drape::{drape, DrapeOptions, DrapeReport};
+pub use error::PrepareError;
+pub use objtext::write_positions_into_obj;
+pub use resize::{resize, ResizeOptions, ResizeReport};
+
+#[cfg(test)]
+mod tests;
