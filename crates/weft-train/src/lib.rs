@@ -9,11 +9,13 @@
 //! - [`run`]: the run directory and checkpoints that resume bit for bit.
 //! - [`metrics`]: metrics.jsonl and curves.png.
 //! - [`trainer`]: the loop, generic over a [`TrainTask`].
+//! - [`multilevel`]: the task of the Multilevel model on a weft-data dataset.
 
 pub mod config;
 pub mod error;
 pub mod loss;
 pub mod metrics;
+pub mod multilevel;
 pub mod run;
 pub mod sampler;
 pub mod schedule;
@@ -21,6 +23,7 @@ pub mod trainer;
 
 pub use config::TrainConfig;
 pub use error::{Result, TrainError};
+pub use multilevel::MultilevelTask;
 pub use run::{RunDir, TrainerState, FORMAT_VERSION};
 pub use schedule::{Phase, ScheduleConfig};
 pub use trainer::{train, Outcome, RunOptions, TrainTask};

@@ -15,7 +15,7 @@ use weft_nn::backend::{cpu_autodiff, seeded};
 use weft_sim::Sphere;
 use weft_train::loss::{
     collision_energies, edge_loss, gravity_energy, membrane_energies, normal_loss, physics_loss,
-    vertex_loss, GarmentTopology, PhysicsImpl, Targets, Term, TermWeights,
+    rest_frames, vertex_loss, GarmentTopology, PhysicsImpl, Targets, Term, TermWeights,
 };
 use weft_train::{train, Phase, RunDir, RunOptions, TrainConfig, TrainError, TrainTask};
 
@@ -163,7 +163,8 @@ impl TrainTask for ToyTask {
                     physics_loss(x.clone(), &Arc::new(e), PhysicsImpl::Auto)?
                 }
                 Term::Stretch | Term::Shear => {
-                    let (s, h) = membrane_energies(&self.mesh, FRAMES)?;
+                    let (s, h) =
+                        membrane_energies(&rest_frames(&self.mesh, None).unwrap(), FRAMES)?;
                     let e = if term == Term::Stretch { s } else { h };
                     physics_loss(x.clone(), &Arc::new(e), PhysicsImpl::Auto)?
                 }

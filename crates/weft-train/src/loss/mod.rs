@@ -222,12 +222,25 @@ pub fn gravity_energy(
     FrameEnergies::shared(Arc::new(g), frames)
 }
 
-/// Eq. 6 and 7 over `frames` frames, with the rest frames of the garment laid flat
-/// (`RestFrames::from_rest_mesh`; garments with UVs can pass their own frames to
-/// [`UvStretch`] / [`UvShear`]).
-pub fn membrane_energies(rest: &TriMesh, frames: usize) -> Result<(FrameEnergies, FrameEnergies)> {
-    let rest_frames = RestFrames::from_rest_mesh(rest)?;
-    let stretch = FrameEnergies::shared(Arc::new(UvStretch::new(rest_frames.clone())), frames)?;
-    let shear = FrameEnergies::shared(Arc::new(UvShear::new(rest_frames)), frames)?;
+/// The rest frames of eq. 8: from the garment's corner UVs (the flat pattern, metres)
+/// when it has them, else its rest triangles laid flat.
+pub fn rest_frames(rest: &TriMesh, corner_uvs: Option<&[[[f32; 2]; 3]]>) -> Result<RestFrames> {
+    Ok(match corner_uvs {
+        Some(uvs) => {
+            let uvs: Vec<[[f64; 2]; 3]> = uvs.iter().map(|f| f.map(|c| c.map(f64::from))).collect();
+            RestFrames::from_corner_uvs(rest.vertex_count(), rest.faces.clone(), &uvs)?
+        }
+        None => RestFrames::from_rest_mesh(rest)?,
+    })
+}
+
+/// Eq. 6 and 7 over `frames` frames of a garment with rest frames `rest`
+/// ([`rest_frames`]).
+pub fn membrane_energies(
+    rest: &RestFrames,
+    frames: usize,
+) -> Result<(FrameEnergies, FrameEnergies)> {
+    let stretch = FrameEnergies::shared(Arc::new(UvStretch::new(rest.clone())), frames)?;
+    let shear = FrameEnergies::shared(Arc::new(UvShear::new(rest.clone())), frames)?;
     Ok((stretch, shear))
 }

@@ -190,7 +190,7 @@ fn physics_terms_match_central_differences_on_both_paths() {
     let collision = collision_energies(&[body, body], &xs, n, &weights).unwrap();
     assert!(collision.value(&xs).unwrap() > 0.0, "the sphere must touch");
     let gravity = gravity_energy(&mesh, t, &weights).unwrap();
-    let (stretch, shear) = membrane_energies(&mesh, t).unwrap();
+    let (stretch, shear) = membrane_energies(&rest_frames(&mesh, None).unwrap(), t).unwrap();
     for energy in [collision, gravity, stretch, shear] {
         let energy = Arc::new(energy);
         for imp in [PhysicsImpl::Auto, PhysicsImpl::Reference] {
@@ -249,7 +249,7 @@ fn physics_loss_rejects_wrong_shapes_and_turns_non_finite_input_into_nan() {
         physics_loss(wrong, &gravity, PhysicsImpl::Auto),
         Err(crate::TrainError::Shape { .. })
     ));
-    let (stretch, _) = membrane_energies(&mesh, 1).unwrap();
+    let (stretch, _) = membrane_energies(&rest_frames(&mesh, None).unwrap(), 1).unwrap();
     let mut x = frames(&mesh, 1, 0.0, 1);
     x[4] = f64::NAN;
     let p = tensor3(&x, 1, n, &device, DType::F32);
