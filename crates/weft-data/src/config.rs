@@ -323,9 +323,23 @@ impl DataConfig {
 
     /// Parses TOML text (not yet validated).
     pub fn from_toml(text: &str) -> Result<Self, DataError> {
-        toml::from_str(text).map_err(|e| DataError::ConfigSyntax {
-            path: PathBuf::from("<config>"),
-            message: e.to_string().trim_end().to_string(),
+        toml::from_str(text).map_err(|e| {
+            // toml's Display draws the offending line over several lines; errors here are
+            // one line: position, then the reader's message.
+            let at = e.span().map(|span| {
+                let before = &text[..span.start.min(text.len())];
+                let line = before.matches('\n').count() + 1;
+                let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+                format!("line {line}, column {column}: ")
+            });
+            DataError::ConfigSyntax {
+                path: PathBuf::from("<config>"),
+                message: format!(
+                    "{}{}",
+                    at.unwrap_or_default(),
+                    e.message().trim_end().replace('\n', "; ")
+                ),
+            }
         })
     }
 
