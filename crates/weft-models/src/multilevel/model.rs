@@ -282,22 +282,54 @@ impl Multilevel {
         g: &GarmentInput,
         f: &FrameInputs,
     ) -> Result<Prediction, ModelError> {
-        self.check_garment(g)?;
-        self.check_frames(g, f)?;
-        let cfg = &self.config;
-        let device = self.device();
-        let (n, s, fw) = (g.vertex_count(), cfg.joints, cfg.feature_width);
-        let t = f.frame_count();
-        let m = cfg.history;
-        if pair.fused.dims() != [n, cfg.fused_width()] {
+        let weights = self.skinning_weights(pair, g, f)?;
+        let motion = self.motion_features(g, f)?;
+        let mut blend: Option<Tensor<2>> = None;
+        for k in 0..self.mp.len() {
+            let b = self.blend_submodule(k, pair, g, &motion)?;
+            blend = Some(match blend {
+                Some(acc) => acc + b,
+                None => b,
+            });
+        }
+        let (t, n) = (f.frame_count(), g.vertex_count());
+        let blend = blend
+            .ok_or_else(|| ModelError::Config("M^mp needs at least one submodule".into()))?
+            .reshape([t, n, 3]);
+        let vertices = self.skin(g, f, weights.clone(), blend.clone())?;
+        Ok(Prediction {
+            vertices,
+            weights,
+            blend,
+        })
+    }
+
+    fn check_pair(&self, pair: &PairEncoding, g: &GarmentInput) -> Result<(), ModelError> {
+        let expected = [g.vertex_count(), self.config.fused_width()];
+        if pair.fused.dims() != expected {
             return Err(ModelError::mismatch(
                 "pair encoding shape (garment vertices × F·S)",
-                format!("{:?}", [n, cfg.fused_width()]),
+                format!("{expected:?}"),
                 format!("{:?}", pair.fused.dims()),
             ));
         }
+        Ok(())
+    }
 
-        // Skinning weights (eq. 6).
+    /// Stage of [`Self::forward`]: `Wᵗ` (eq. 6), `[T, N, S]`.
+    pub fn skinning_weights(
+        &self,
+        pair: &PairEncoding,
+        g: &GarmentInput,
+        f: &FrameInputs,
+    ) -> Result<Tensor<3>, ModelError> {
+        self.check_garment(g)?;
+        self.check_frames(g, f)?;
+        self.check_pair(pair, g)?;
+        let cfg = &self.config;
+        let device = self.device();
+        let (n, s, fw) = (g.vertex_count(), cfg.joints, cfg.feature_width);
+        let (t, m) = (f.frame_count(), cfg.history);
         let (_, motion1) = self
             .t1
             .forward(tensor3(&f.poses, [t, m, POSE_FEATURES], &device))?;
@@ -319,39 +351,75 @@ impl Multilevel {
         } else {
             logits
         };
-        let weights = softmax(logits, 2);
+        Ok(softmax(logits, 2))
+    }
 
-        // Blend shapes (eq. 7–8).
+    /// Stage of [`Self::forward`]: the E^t2 features of every frame, `[T, F·S]`.
+    pub fn motion_features(
+        &self,
+        g: &GarmentInput,
+        f: &FrameInputs,
+    ) -> Result<Tensor<2>, ModelError> {
+        self.check_garment(g)?;
+        self.check_frames(g, f)?;
+        let cfg = &self.config;
+        let (t, m) = (f.frame_count(), cfg.history);
         let (_, motion2) = self.t2.forward(tensor3(
             &f.velocities,
             [t, m, 3 * cfg.body_samples],
-            &device,
+            &self.device(),
         ))?;
-        let batch = g.frame_batch(t)?;
-        let mut blend: Option<Tensor<2>> = None;
-        for sub in &self.mp {
-            let b = sub.forward(pair.fused.clone(), motion2.clone(), &batch)?;
-            blend = Some(match blend {
-                Some(acc) => acc + b,
-                None => b,
-            });
-        }
-        let blend = blend
-            .ok_or_else(|| ModelError::Config("M^mp needs at least one submodule".into()))?
-            .reshape([t, n, 3]);
+        Ok(motion2)
+    }
 
-        // Linear blend skinning (eq. 2–3).
+    /// Stage of [`Self::forward`]: the blend shapes of M^mp submodule `k`, `[T·N, 3]`,
+    /// from the E^t2 features `motion` of [`Self::motion_features`].
+    pub fn blend_submodule(
+        &self,
+        k: usize,
+        pair: &PairEncoding,
+        g: &GarmentInput,
+        motion: &Tensor<2>,
+    ) -> Result<Tensor<2>, ModelError> {
+        self.check_pair(pair, g)?;
+        let sub = self.mp.get(k).ok_or_else(|| {
+            ModelError::mismatch("M^mp submodule index", format!("< {}", self.mp.len()), k)
+        })?;
+        let t = motion.dims()[0];
+        let batch = g.frame_batch(t)?;
+        sub.forward(pair.fused.clone(), motion.clone(), &batch)
+    }
+
+    /// Stage of [`Self::forward`]: linear blend skinning (eq. 2–3) of `T + Bᵗ` with
+    /// `Wᵗ` and the joint transforms of `f`, `[T, N, 3]`.
+    pub fn skin(
+        &self,
+        g: &GarmentInput,
+        f: &FrameInputs,
+        weights: Tensor<3>,
+        blend: Tensor<3>,
+    ) -> Result<Tensor<3>, ModelError> {
+        let device = self.device();
+        let (t, n, s) = (f.frame_count(), g.vertex_count(), f.joint_count());
+        for (what, dims) in [
+            ("skinning weights", weights.dims()),
+            ("blend shapes", blend.dims()),
+        ] {
+            let want = [t, n, if what == "blend shapes" { 3 } else { s }];
+            if dims != want {
+                return Err(ModelError::mismatch(
+                    what,
+                    format!("{want:?}"),
+                    format!("{dims:?}"),
+                ));
+            }
+        }
         let transforms = tensor3(&f.transforms, [t, s, 12], &device);
-        let blended = weights.clone().matmul(transforms).reshape([t, n, 3, 4]);
-        let rest = tensor2(&g.rest, [n, 3], &device).unsqueeze_dim::<3>(0) + blend.clone();
+        let blended = weights.matmul(transforms).reshape([t, n, 3, 4]);
+        let rest = tensor2(&g.rest, [n, 3], &device).unsqueeze_dim::<3>(0) + blend;
         let homogeneous = Tensor::cat(vec![rest, Tensor::ones([t, n, 1], &device)], 2);
-        let vertices = (blended * homogeneous.unsqueeze_dim(2))
+        Ok((blended * homogeneous.unsqueeze_dim(2))
             .sum_dim(3)
-            .reshape([t, n, 3]);
-        Ok(Prediction {
-            vertices,
-            weights,
-            blend,
-        })
+            .reshape([t, n, 3]))
     }
 }

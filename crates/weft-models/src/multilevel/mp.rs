@@ -124,8 +124,27 @@ impl MpSubmodule {
         motion: Tensor<2>,
         batch: &HierarchyBatch,
     ) -> Result<Tensor<2>, ModelError> {
+        let x = self.embed(fused, motion, batch.batch(0))?;
+        self.process(x, batch)
+    }
+
+    /// The embedding GAT of every frame, `[T·N, heads·channels]`: one GEMM
+    /// `X [diag(e_1)W | … | diag(e_T)W]`, then attention on the `T` copies of the graph.
+    pub fn embed(
+        &self,
+        fused: Tensor<2>,
+        motion: Tensor<2>,
+        level0: &GraphBatch,
+    ) -> Result<Tensor<2>, ModelError> {
         let [n, fs] = fused.dims();
         let t = motion.dims()[0];
+        if motion.dims()[1] != fs {
+            return Err(ModelError::mismatch(
+                "E^t2 features (F·S per frame)",
+                fs,
+                motion.dims()[1],
+            ));
+        }
         let hc = self.embed.heads * self.embed.channels;
         // [FS, T, HC]: column block t is diag(e_t) W.
         let w = motion.transpose().unsqueeze_dim::<3>(2) * self.embed.weight.val().unsqueeze_dim(1);
@@ -134,7 +153,6 @@ impl MpSubmodule {
             .reshape([n, t, hc])
             .swap_dims(0, 1)
             .reshape([t * n, hc]);
-        let level0 = batch.batch(0);
         let mut x = attention(
             z,
             self.embed.att_src.val(),
@@ -146,7 +164,12 @@ impl MpSubmodule {
         if let Some(bias) = &self.embed.bias {
             x = x + bias.val().unsqueeze_dim(0);
         }
-        let x = x.tanh();
+        Ok(x.tanh())
+    }
+
+    /// Encoder, decoder and output GAT on embedded features `x` (`[T·N, heads·channels]`).
+    pub fn process(&self, x: Tensor<2>, batch: &HierarchyBatch) -> Result<Tensor<2>, ModelError> {
+        let level0 = batch.batch(0);
         let x = match self.pooling {
             PoolingKind::Structure => self.unet_structure(x, batch)?,
             PoolingKind::None => self.cascade(x, level0)?,
