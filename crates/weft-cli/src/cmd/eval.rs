@@ -1,0 +1,191 @@
+//! `weft eval`: a trained run against the simulated ground truth of a dataset split and
+//! the LBS-only baseline (RUN/report/), or several runs side by side as Table 1.
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use std::path::{Path, PathBuf};
+use weft_data::{Dataset, Split};
+use weft_eval::evaluate::{evaluate, write_report, EvalOptions};
+use weft_eval::report::{markdown_table, write_text, Comparison, EvalReport};
+use weft_models::multilevel::Predictor;
+use weft_render::Report;
+
+use super::emit;
+
+#[derive(Args)]
+pub struct EvalArgs {
+    /// Run directories written by `weft train`. One run is evaluated into RUN/report/
+    /// (eval.json, eval.md, eval.html and pictures); with --compare, every run is
+    /// evaluated (or its RUN/report/eval.json reused with --reuse) and the Table 1
+    /// comparison is written to --out.
+    #[arg(required = true, value_name = "RUN")]
+    runs: Vec<PathBuf>,
+    /// The dataset directory (written by `weft data generate`).
+    #[arg(long, value_name = "DIR")]
+    data: Option<PathBuf>,
+    /// Which split: test (reported numbers), validation or train.
+    #[arg(long, default_value = "test", value_parser = parse_split)]
+    split: Split,
+    /// Compare the runs (one per pooling variant, same data and budget) as Table 1.
+    #[arg(long)]
+    compare: bool,
+    /// Where --compare writes table1.md, table1.html and table1.json.
+    #[arg(long, value_name = "DIR", default_value = "table1")]
+    out: PathBuf,
+    /// With --compare: reuse a run's RUN/report/eval.json when it was made on the same
+    /// data and split, instead of evaluating again.
+    #[arg(long)]
+    reuse: bool,
+    /// Evaluate only the first N sequences of the split.
+    #[arg(long, value_name = "N")]
+    max_sequences: Option<usize>,
+    /// Skip the garment–body collision check (one distance query per vertex and frame).
+    #[arg(long)]
+    no_collisions: bool,
+    /// Skip timing inference.
+    #[arg(long)]
+    no_timing: bool,
+    /// Print the report (or the comparison) as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_split(s: &str) -> Result<Split, String> {
+    Split::ALL
+        .into_iter()
+        .find(|x| x.name() == s)
+        .ok_or_else(|| format!("unknown split {s:?}; expected train, validation or test"))
+}
+
+/// The command line as typed, for the reports' "reproduce with".
+pub fn command_line() -> String {
+    std::env::args()
+        .map(|a| {
+            if a.is_empty() || a.contains(|c: char| c.is_whitespace() || c == '"' || c == '\'') {
+                format!("'{}'", a.replace('\'', "'\\''"))
+            } else {
+                a
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Evaluates `run` on `data` and writes RUN/report/; returns the report.
+pub fn evaluate_run(
+    run: &Path,
+    data: &Path,
+    opts: &EvalOptions,
+    quiet: bool,
+) -> Result<EvalReport> {
+    let predictor =
+        Predictor::load(run).with_context(|| format!("loading run {}", run.display()))?;
+    let dataset =
+        Dataset::open(data).with_context(|| format!("opening dataset {}", data.display()))?;
+    eprintln!(
+        "evaluating {} (preset {}, pooling {}) on the {} split of {}",
+        run.display(),
+        predictor.config().preset,
+        predictor.config().pooling.name(),
+        opts.split,
+        data.display()
+    );
+    let mut progress = |line: &str| {
+        if !quiet {
+            eprintln!("  {line}");
+        }
+    };
+    let eval = evaluate(&predictor, run, &dataset, opts, &mut progress)?;
+    let dir = run.join("report");
+    let html = write_report(&eval, &dir)?;
+    eprintln!(
+        "wrote {} (and eval.md, eval.json, pictures)",
+        html.display()
+    );
+    Ok(eval.report)
+}
+
+pub fn run(args: &EvalArgs) -> Result<()> {
+    let Some(data) = &args.data else {
+        bail!("--data DIR is required: the dataset to evaluate on (the run does not record it)");
+    };
+    if args.runs.len() > 1 && !args.compare {
+        bail!(
+            "{} runs given; pass --compare to evaluate several runs as one table",
+            args.runs.len()
+        );
+    }
+    let opts = EvalOptions {
+        split: args.split,
+        max_sequences: args.max_sequences,
+        collisions: !args.no_collisions,
+        fps_batches: if args.no_timing { vec![] } else { vec![1, 16] },
+        command: command_line(),
+        ..EvalOptions::default()
+    };
+    if !args.compare {
+        let report = evaluate_run(&args.runs[0], data, &opts, args.json)?;
+        if args.json {
+            emit(&serde_json::to_string_pretty(&report)?)?;
+        } else {
+            emit(&report.to_markdown())?;
+        }
+        return Ok(());
+    }
+    let mut reports = Vec::new();
+    for run in &args.runs {
+        let cached = run.join("report").join("eval.json");
+        let reused = if args.reuse && cached.is_file() {
+            let r = EvalReport::read(&cached)?;
+            (r.data == data.display().to_string() && r.split == args.split.name()).then_some(r)
+        } else {
+            None
+        };
+        let report = match reused {
+            Some(r) => {
+                eprintln!("reusing {}", cached.display());
+                r
+            }
+            None => {
+                let mut o = opts.clone();
+                o.command = format!(
+                    "weft eval {} --data {} --split {}",
+                    run.display(),
+                    data.display(),
+                    args.split
+                );
+                evaluate_run(run, data, &o, args.json)?
+            }
+        };
+        reports.push(report);
+    }
+    let table = Comparison::new(reports, opts.command.clone())?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let md = table.to_markdown();
+    write_text(&args.out.join("table1.md"), &md)?;
+    let json: Vec<&EvalReport> = table.reports.iter().collect();
+    write_text(
+        &args.out.join("table1.json"),
+        &serde_json::to_string_pretty(&json)?,
+    )?;
+    let mut html = Report::new("Table 1: pooling variants against the LBS-only baseline");
+    let (h, rows) = table.table();
+    html.table(h.clone(), rows.clone());
+    html.paragraph("Mean (± std) over every vertex of every frame of the split.");
+    html.heading("Reproduce");
+    html.code(table.command.clone());
+    html.write(&args.out.join("table1.html"))?;
+    eprintln!(
+        "wrote {} (and table1.md, table1.json)",
+        args.out.join("table1.html").display()
+    );
+    if args.json {
+        emit(&serde_json::to_string_pretty(&json)?)?;
+    } else {
+        let mut s = String::new();
+        markdown_table(&mut s, &h, &rows);
+        emit(&s)?;
+    }
+    Ok(())
+}
