@@ -23,7 +23,7 @@ pub mod trainer;
 
 pub use config::TrainConfig;
 pub use error::{Result, TrainError};
-pub use multilevel::MultilevelTask;
+pub use multilevel::{MultilevelRun, MultilevelTask};
 pub use run::{RunDir, TrainerState, FORMAT_VERSION};
 pub use schedule::{Phase, ScheduleConfig};
 pub use trainer::{train, Outcome, RunOptions, TrainTask};

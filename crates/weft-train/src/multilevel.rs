@@ -38,8 +38,140 @@ use crate::loss::{
     normal_loss, physics_loss, rest_frames, vertex_loss, FrameEnergies, GarmentTopology,
     PhysicsImpl, Targets, Term, TermWeights,
 };
+use crate::run::RunDir;
 use crate::schedule::Phase;
 use crate::trainer::TrainTask;
+
+/// The configuration of a Multilevel run: preset name, model and training tables.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MultilevelRun {
+    /// The preset the run started from (`cpu` or `paper`).
+    pub preset: String,
+    /// The model (`[model]`).
+    pub model: MultilevelConfig,
+    /// The training (`[train]`).
+    pub train: TrainConfig,
+}
+
+/// `overlay` merged into `base`, tables recursively, other values replaced.
+fn merge(base: &mut toml::Table, overlay: toml::Table) {
+    for (k, v) in overlay {
+        match (base.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
+            (_, v) => {
+                base.insert(k, v);
+            }
+        }
+    }
+}
+
+impl MultilevelRun {
+    /// The preset `name` (model and training sides).
+    pub fn preset(name: &str) -> Result<Self> {
+        Ok(MultilevelRun {
+            preset: name.to_string(),
+            model: MultilevelConfig::preset(name).map_err(models)?,
+            train: TrainConfig::preset(name)?,
+        })
+    }
+
+    /// A preset with a config file's `[model]` and `[train]` fields laid over it. The
+    /// preset is `preset`, else the file's `preset`, else `cpu`. Unknown fields and
+    /// values out of range are errors naming the file and the field.
+    pub fn resolve(preset: Option<&str>, file: Option<&Path>) -> Result<Self> {
+        let table: Option<toml::Table> = match file {
+            Some(path) => {
+                let text = std::fs::read_to_string(path).map_err(|e| TrainError::io(path, e))?;
+                Some(toml::from_str(&text).map_err(|e| TrainError::Parse {
+                    path: path.to_path_buf(),
+                    message: e.to_string(),
+                })?)
+            }
+            None => None,
+        };
+        let name = preset
+            .map(str::to_string)
+            .or_else(|| {
+                table
+                    .as_ref()
+                    .and_then(|t| t.get("preset"))
+                    .and_then(toml::Value::as_str)
+                    .map(str::to_string)
+            })
+            .unwrap_or_else(|| "cpu".to_string());
+        let mut run = Self::preset(&name)?;
+        let Some(mut table) = table else {
+            return Ok(run);
+        };
+        let path = file.unwrap_or(Path::new("config"));
+        let parse = |message: String| TrainError::Parse {
+            path: path.to_path_buf(),
+            message,
+        };
+        for key in table.keys() {
+            if !["format_version", "preset", "model", "train"].contains(&key.as_str()) {
+                return Err(parse(format!(
+                    "unknown key `{key}` (expected format_version, preset, [model], [train])"
+                )));
+            }
+        }
+        if let Some(v) = table.get("format_version") {
+            if v.as_integer() != Some(crate::run::FORMAT_VERSION) {
+                return Err(TrainError::Mismatch {
+                    path: path.to_path_buf(),
+                    field: "format_version".into(),
+                    found: v.to_string(),
+                    expected: crate::run::FORMAT_VERSION.to_string(),
+                });
+            }
+        }
+        if let Some(toml::Value::Table(m)) = table.remove("model") {
+            let mut base = crate::run::to_table("model config", &run.model)?;
+            merge(&mut base, m);
+            run.model = toml::Value::Table(base)
+                .try_into()
+                .map_err(|e: toml::de::Error| parse(format!("[model]: {e}")))?;
+            run.model
+                .validate()
+                .map_err(|e| parse(format!("[model]: {e}")))?;
+        }
+        if let Some(toml::Value::Table(t)) = table.remove("train") {
+            let mut base = crate::run::to_table("train config", &run.train)?;
+            merge(&mut base, t);
+            run.train = toml::Value::Table(base)
+                .try_into()
+                .map_err(|e: toml::de::Error| parse(format!("[train]: {e}")))?;
+        }
+        run.train.validate()?;
+        Ok(run)
+    }
+
+    /// The configuration of the run in `dir` (its config.toml).
+    pub fn from_run_dir(dir: &Path) -> Result<Self> {
+        let path = dir.join("config.toml");
+        if !path.exists() {
+            return Err(TrainError::RunDir {
+                path: dir.to_path_buf(),
+                message: "no config.toml: not a training run directory".into(),
+            });
+        }
+        Self::resolve(None, Some(&path))
+    }
+
+    /// The run directory `dir` for this configuration.
+    pub fn run_dir(&self, dir: &Path) -> Result<RunDir> {
+        RunDir::new(dir, &self.preset, &self.model, &self.train)
+    }
+
+    /// The full configuration as config.toml text (every default written out).
+    pub fn to_toml(&self) -> Result<String> {
+        crate::run::config_text(
+            &self.preset,
+            &crate::run::to_table("model config", &self.model)?,
+            &self.train,
+        )
+    }
+}
 
 /// One garment–body–motion sequence with everything constant precomputed.
 struct Pair {
@@ -411,7 +543,43 @@ impl TrainTask for MultilevelTask {
 
 #[cfg(test)]
 mod tests {
-    use super::windows;
+    use super::*;
+
+    #[test]
+    fn run_configs_resolve_from_presets_and_files() {
+        let cpu = MultilevelRun::resolve(None, None).unwrap();
+        assert_eq!(cpu, MultilevelRun::preset("cpu").unwrap());
+        // What `weft config show` prints reads back to the same configuration.
+        let dir = std::env::temp_dir().join(format!("weft-train-cfg-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("paper.toml");
+        let paper = MultilevelRun::preset("paper").unwrap();
+        std::fs::write(&path, paper.to_toml().unwrap()).unwrap();
+        assert_eq!(MultilevelRun::resolve(None, Some(&path)).unwrap(), paper);
+        // A partial file over a preset.
+        std::fs::write(&path, "[train]\nsteps = 9\n[model]\nmp_channels = 4\n").unwrap();
+        let r = MultilevelRun::resolve(Some("cpu"), Some(&path)).unwrap();
+        assert_eq!((r.train.steps, r.model.mp_channels), (9, 4));
+        assert_eq!(r.model.gg_widths, MultilevelConfig::cpu().gg_widths);
+        // Unknown or out-of-range fields are named.
+        std::fs::write(&path, "[train]\nstepz = 9\n").unwrap();
+        let e = MultilevelRun::resolve(None, Some(&path))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("stepz"), "{e}");
+        std::fs::write(&path, "[train]\nwindow = 0\n").unwrap();
+        let e = MultilevelRun::resolve(None, Some(&path))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("train.window"), "{e}");
+        std::fs::write(&path, "format_version = 7\n").unwrap();
+        let e = MultilevelRun::resolve(None, Some(&path))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("format_version"), "{e}");
+        assert!(MultilevelRun::resolve(Some("huge"), None).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn windows_tile_the_sequence() {

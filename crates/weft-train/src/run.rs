@@ -68,7 +68,8 @@ pub struct RunDir {
     train: TrainConfig,
 }
 
-fn to_table<T: Serialize>(what: &str, value: &T) -> Result<toml::Table> {
+/// `value` as a TOML table.
+pub fn to_table<T: Serialize>(what: &str, value: &T) -> Result<toml::Table> {
     toml::Table::try_from(value)
         .map_err(|e| TrainError::Model(format!("{what} as a TOML table: {e}")))
 }
@@ -349,6 +350,23 @@ impl RunDir {
         toml::to_string(&self.model_toml)
             .map_err(|e| TrainError::Model(format!("model config: {e}")))
     }
+}
+
+/// The text of a run's config.toml: format version, preset, `[model]`, `[train]` (what
+/// `weft config show` prints and `weft train --config` reads back).
+pub fn config_text(preset: &str, model: &toml::Table, train: &TrainConfig) -> Result<String> {
+    let mut t = toml::Table::new();
+    t.insert(
+        "format_version".into(),
+        toml::Value::Integer(FORMAT_VERSION),
+    );
+    t.insert("preset".into(), toml::Value::String(preset.to_string()));
+    t.insert("model".into(), toml::Value::Table(model.clone()));
+    t.insert(
+        "train".into(),
+        toml::Value::Table(to_table("train config", train)?),
+    );
+    toml::to_string(&t).map_err(|e| TrainError::Model(format!("config.toml: {e}")))
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
