@@ -1,15 +1,14 @@
 //! Subcommands, one module each.
 
-mod animate;
-mod attribute;
 mod body;
+mod config;
 mod data;
-mod eval;
 mod export;
 mod garment;
 mod mesh;
 mod motion;
 mod render;
+mod train;
 
 use clap::Subcommand;
 
@@ -36,14 +35,11 @@ pub enum Command {
     /// Simulated datasets: generate (resumable, shardable), info, merge.
     #[command(subcommand)]
     Data(data::DataCommand),
-    /// Evaluate a trained run against the simulated ground truth and the LBS-only
-    /// baseline (RUN/report/), or compare runs as Table 1 (--compare).
-    Eval(eval::EvalArgs),
-    /// Attribution of one output vertex (seed 000 eq. 9) drawn as a heat map.
-    Attribute(attribute::AttributeArgs),
-    /// Animate any garment on a body shape and motion with a trained run; export as
-    /// OBJ sequence, PC2/MDD or glTF binary.
-    Animate(animate::AnimateArgs),
+    /// Train the Multilevel model on a dataset (two-step schedule, resumable checkpoints).
+    Train(train::TrainArgs),
+    /// Model and training configurations: `weft config show --preset cpu|paper`.
+    #[command(subcommand)]
+    Config(config::ConfigCommand),
 }
 
 pub fn run(command: Command) -> anyhow::Result<()> {
@@ -55,9 +51,8 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Export(a) => export::run(&a),
         Command::Garment(c) => garment::run(c),
         Command::Data(c) => data::run(c),
-        Command::Eval(a) => eval::run(&a),
-        Command::Attribute(a) => attribute::run(&a),
-        Command::Animate(a) => animate::run(&a),
+        Command::Train(a) => train::run(&a),
+        Command::Config(c) => config::run(c),
     }
 }
 
