@@ -1,8 +1,11 @@
 //! Subcommands, one module each.
 
+mod animate;
+mod attribute;
 mod body;
 mod config;
 mod data;
+mod eval;
 mod export;
 mod garment;
 mod mesh;
@@ -40,6 +43,14 @@ pub enum Command {
     /// Model and training configurations: `weft config show --preset cpu|paper`.
     #[command(subcommand)]
     Config(config::ConfigCommand),
+    /// Evaluate a trained run against the simulated ground truth and the LBS-only
+    /// baseline (RUN/report/), or compare runs as Table 1 (--compare).
+    Eval(eval::EvalArgs),
+    /// Attribution of one output vertex (seed 000 eq. 9) drawn as a heat map.
+    Attribute(attribute::AttributeArgs),
+    /// Animate any garment on a body shape and motion with a trained run; export as
+    /// OBJ sequence, PC2/MDD or glTF binary.
+    Animate(animate::AnimateArgs),
 }
 
 pub fn run(command: Command) -> anyhow::Result<()> {
@@ -53,6 +64,9 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Data(c) => data::run(c),
         Command::Train(a) => train::run(&a),
         Command::Config(c) => config::run(c),
+        Command::Eval(a) => eval::run(&a),
+        Command::Attribute(a) => attribute::run(&a),
+        Command::Animate(a) => animate::run(&a),
     }
 }
 
