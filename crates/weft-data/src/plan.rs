@@ -348,6 +348,23 @@ mod tests {
     }
 
     #[test]
+    fn paper_plan_has_the_seed_000_pose_counts() {
+        let m = plan(&DataConfig::paper(), 10, "b").unwrap();
+        let poses = |s: Split| -> usize {
+            m.sequences_in(s)
+                .map(|r| r.frame_range[1] - r.frame_range[0])
+                .sum()
+        };
+        assert_eq!(poses(Split::Train), 49_500);
+        assert_eq!(poses(Split::Validation), 3_000);
+        assert_eq!(poses(Split::Test), 8_000);
+        assert_eq!(
+            m.bodies.iter().filter(|b| b.split == Split::Train).count(),
+            9
+        );
+    }
+
+    #[test]
     fn round_robin_uses_every_motion() {
         let c = DataConfig::tiny();
         let m = plan(&c, 10, "b").unwrap();
