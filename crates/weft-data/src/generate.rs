@@ -409,6 +409,14 @@ fn resume(
             remove_temp_files(&out.join(rel))?;
         }
     }
+    remove_temp_files(path)?;
+    // Garment files are shared by all jobs; another job may be writing one right now, so
+    // only a single-job run clears their leftovers.
+    if manifest.job.is_none() {
+        for g in &manifest.garments {
+            remove_temp_files(&out.join(&g.file))?;
+        }
+    }
     if !path.exists() {
         return Ok(0);
     }

@@ -187,8 +187,13 @@ fn a_killed_run_resumes_and_redoes_only_the_broken_shard() {
     let other_bytes = std::fs::read(&other_path).unwrap();
     std::fs::write(&other_path, &other_bytes[..100]).unwrap();
 
+    // A manifest write cut short too.
+    let manifest_temp = dir.join(".manifest.json.999.1.tmp");
+    std::fs::write(&manifest_temp, &manifest_before[..10]).unwrap();
+
     let sim = FakeSim::new();
     let report = generate(&c, &dir, &GenerateOptions::default(), &sim, &Silent).unwrap();
+    assert!(!manifest_temp.exists());
     assert_eq!(sim.calls.load(Ordering::SeqCst), 2);
     assert_eq!(report.kept, 4);
     assert_eq!(report.done, 2);
