@@ -1,12 +1,19 @@
 //! `weft garment generate`: procedural garment templates fitted to a body.
+//! `weft garment resize | drape | prepare`: fit any garment (a template or an OBJ) to a
+//! body shape, settle it on the rest body with the simulator, transfer skinning weights.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
+use serde_json::json;
 use weft_body::BodyModel;
+use weft_garment::prepare::{
+    drape, resize, write_positions_into_obj, DrapeOptions, DrapeReport, Material, ResizeOptions,
+    ResizeReport,
+};
 use weft_garment::{DressTop, FitBody, GarmentKind, SkirtLength, Style};
-use weft_mesh::Topology;
+use weft_mesh::{Topology, TriMesh};
 
 use super::emit;
 
@@ -14,6 +21,13 @@ use super::emit;
 pub enum GarmentCommand {
     /// Write a procedural garment template (OBJ with UVs) fitted to a body.
     Generate(GenerateArgs),
+    /// Move a garment fitted to body shape --from-betas onto shape --to-betas.
+    Resize(ResizeArgs),
+    /// Settle a garment on the rest-pose body with the cloth simulator.
+    Drape(DrapeArgs),
+    /// Resize to --betas, drape, and optionally write skinning weights: a garment ready
+    /// for simulation and the LBS baselines.
+    Prepare(PrepareArgs),
 }
 
 // Values are taken as text and parsed here so every bad argument is one line of error.
@@ -48,9 +62,103 @@ pub struct GenerateArgs {
     out: PathBuf,
 }
 
+/// The garment to prepare and the body it is on.
+#[derive(Args)]
+pub struct GarmentOnBody {
+    /// The garment (OBJ or PLY, metres, in the body's rest-pose frame). OBJ in and OBJ
+    /// out keeps the file's UVs, groups and face corners: only `v` lines change.
+    #[arg(long)]
+    garment: PathBuf,
+    /// A body model in the SMPL .npz layout; default: weft's default body.
+    #[arg(long)]
+    body: Option<PathBuf>,
+}
+
+/// Drape parameters shared by `drape` and `prepare`.
+#[derive(Args)]
+pub struct DrapeFlags {
+    /// Cloth material preset (hood, silk, cotton, jersey, denim, leather).
+    #[arg(long, default_value = "cotton")]
+    material: String,
+    /// Frame budget of the drape (30 fps).
+    #[arg(long, default_value = "120")]
+    frames: String,
+    /// Settled when the largest vertex speed falls below this (m/s).
+    #[arg(long, default_value = "0.02")]
+    settle_speed: String,
+    /// Do not hold the top opening (waistband or neckline) in place.
+    #[arg(long)]
+    no_pin: bool,
+}
+
+#[derive(Args)]
+pub struct ResizeArgs {
+    #[command(flatten)]
+    garment: GarmentOnBody,
+    /// β of the body the garment was fitted to, comma-separated (default: all 0).
+    #[arg(long, allow_hyphen_values = true)]
+    from_betas: Option<String>,
+    /// β of the body to fit it to.
+    #[arg(long, allow_hyphen_values = true)]
+    to_betas: String,
+    /// Output mesh (.obj or .ply).
+    #[arg(long)]
+    out: PathBuf,
+    /// Write what was done as JSON here.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct DrapeArgs {
+    #[command(flatten)]
+    garment: GarmentOnBody,
+    /// β of the body (default: all 0).
+    #[arg(long, allow_hyphen_values = true)]
+    betas: Option<String>,
+    #[command(flatten)]
+    drape: DrapeFlags,
+    /// Output mesh (.obj or .ply).
+    #[arg(long)]
+    out: PathBuf,
+    /// Write what was done as JSON here.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+#[derive(Args)]
+pub struct PrepareArgs {
+    #[command(flatten)]
+    garment: GarmentOnBody,
+    /// β of the body the garment was fitted to (default: all 0).
+    #[arg(long, allow_hyphen_values = true)]
+    from_betas: Option<String>,
+    /// β of the body to prepare it for (default: all 0, no resize).
+    #[arg(long, allow_hyphen_values = true)]
+    betas: Option<String>,
+    /// Skip the drape (resize and weights only).
+    #[arg(long)]
+    no_drape: bool,
+    #[command(flatten)]
+    drape: DrapeFlags,
+    /// Output mesh (.obj or .ply).
+    #[arg(long)]
+    out: PathBuf,
+    /// Skinning weights of the prepared garment: float32 .npy, vertices × joints, rows
+    /// summing to 1 (closest body surface point, barycentric).
+    #[arg(long)]
+    weights: Option<PathBuf>,
+    /// Write what was done as JSON here.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
 pub fn run(command: GarmentCommand) -> Result<()> {
     match command {
         GarmentCommand::Generate(a) => run_generate(&a),
+        GarmentCommand::Resize(a) => run_resize(&a),
+        GarmentCommand::Drape(a) => run_drape(&a),
+        GarmentCommand::Prepare(a) => run_prepare(&a),
     }
 }
 
@@ -84,26 +192,8 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
             _ => bail!("--dress-top {t:?}: expected strapless, straps or sleeves"),
         };
     }
-    let betas: Vec<f64> = match &a.betas {
-        None => Vec::new(),
-        Some(text) => text
-            .split(',')
-            .map(|b| number("betas", b))
-            .collect::<Result<_>>()?,
-    };
-    let (model, name) = match &a.body {
-        Some(path) => (BodyModel::load(path)?, path.display().to_string()),
-        None => (weft_body::default_body()?, "the default body".to_string()),
-    };
-    if betas.len() > model.num_betas() {
-        bail!(
-            "--betas has {} values; {name} has {}",
-            betas.len(),
-            model.num_betas()
-        );
-    }
-    let mut betas = betas;
-    betas.resize(model.num_betas(), 0.0);
+    let (model, name) = load_body(a.body.as_deref())?;
+    let betas = parse_betas("betas", a.betas.as_deref(), &model, &name)?;
     let fit = FitBody::new(&model, &betas).with_context(|| format!("{name}: fitting"))?;
     let garment = fit.generate(kind, &style, vertices)?;
     let fitted_to = name;
@@ -118,4 +208,237 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
         openings,
         fitted_to
     ))
+}
+
+/// The body model and a name for messages.
+fn load_body(path: Option<&Path>) -> Result<(BodyModel, String)> {
+    Ok(match path {
+        Some(path) => (BodyModel::load(path)?, path.display().to_string()),
+        None => (weft_body::default_body()?, "the default body".to_string()),
+    })
+}
+
+/// `--flag b1,b2,…` padded with zeros to the model's β count (absent: all zeros).
+fn parse_betas(flag: &str, text: Option<&str>, model: &BodyModel, name: &str) -> Result<Vec<f64>> {
+    let mut betas: Vec<f64> = match text {
+        None => Vec::new(),
+        Some(text) => text
+            .split(',')
+            .map(|b| number(flag, b))
+            .collect::<Result<_>>()?,
+    };
+    if betas.len() > model.num_betas() {
+        bail!(
+            "--{flag} has {} values; {name} has {}",
+            betas.len(),
+            model.num_betas()
+        );
+    }
+    betas.resize(model.num_betas(), 0.0);
+    Ok(betas)
+}
+
+fn fit_body(model: &BodyModel, betas: &[f64], name: &str) -> Result<FitBody> {
+    FitBody::new(model, betas).with_context(|| format!("{name} at β = {betas:?}"))
+}
+
+/// The garment mesh and, for OBJ input, its text (so UVs survive).
+struct GarmentFile {
+    mesh: TriMesh,
+    obj_text: Option<String>,
+}
+
+fn read_garment(path: &Path) -> Result<GarmentFile> {
+    let mesh = weft_mesh::io::read_mesh(path)?;
+    let is_obj = matches!(
+        weft_mesh::io::MeshFormat::from_path(path)?,
+        weft_mesh::io::MeshFormat::Obj
+    );
+    let obj_text = if is_obj {
+        Some(
+            std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?,
+        )
+    } else {
+        None
+    };
+    Ok(GarmentFile { mesh, obj_text })
+}
+
+/// Writes the garment with new positions: into its own OBJ text when both are OBJ,
+/// else as a fresh mesh in the output's format.
+fn write_garment(
+    input: &Path,
+    garment: &GarmentFile,
+    positions: &[[f64; 3]],
+    out: &Path,
+) -> Result<()> {
+    let out_is_obj = matches!(
+        weft_mesh::io::MeshFormat::from_path(out)?,
+        weft_mesh::io::MeshFormat::Obj
+    );
+    match (&garment.obj_text, out_is_obj) {
+        (Some(text), true) => {
+            let text = write_positions_into_obj(text, positions, input)?;
+            weft_mesh::io::write_atomic(out, |w| w.write_all(text.as_bytes()))
+                .with_context(|| format!("cannot write {}", out.display()))?;
+        }
+        _ => {
+            let mesh = TriMesh::new(positions.to_vec(), garment.mesh.faces.clone());
+            weft_mesh::io::write_mesh(out, &mesh)?;
+        }
+    }
+    Ok(())
+}
+
+fn write_report(path: Option<&Path>, value: &serde_json::Value) -> Result<()> {
+    let Some(path) = path else { return Ok(()) };
+    let text = serde_json::to_string_pretty(value)?;
+    weft_mesh::io::write_atomic(path, |w| w.write_all(text.as_bytes()))
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn drape_options(flags: &DrapeFlags) -> Result<(DrapeOptions, Material)> {
+    let material = Material::preset(&flags.material)?;
+    let options = DrapeOptions {
+        max_frames: number("frames", &flags.frames)?,
+        settle_speed: number("settle-speed", &flags.settle_speed)?,
+        pin_top_opening: !flags.no_pin,
+        ..DrapeOptions::default()
+    };
+    Ok((options, material))
+}
+
+fn resize_json(r: &ResizeReport) -> serde_json::Value {
+    json!({
+        "mean_displacement_m": r.mean_displacement,
+        "max_displacement_m": r.max_displacement,
+        "inside_before_push_out": r.before_push_out.count,
+        "pushed_out": r.pushed_out,
+        "max_push_m": r.max_push,
+        "inside_after": r.after.count,
+        "deepest_after_m": r.after.max_depth,
+    })
+}
+
+fn drape_json(r: &DrapeReport) -> serde_json::Value {
+    json!({
+        "inside_before": r.before.count,
+        "deepest_before_m": r.before.max_depth,
+        "pushed_out": r.pushed_out,
+        "inside_after": r.after.count,
+        "deepest_after_m": r.after.max_depth,
+        "deeper_than_threshold_after": r.after.beyond_tolerance,
+        "frames": r.frames,
+        "settled": r.settled,
+        "final_max_speed_m_s": r.max_speeds.last().copied().unwrap_or(0.0),
+        "max_speeds_m_s": r.max_speeds,
+        "newton_iterations": r.newton_iterations,
+        "pinned": r.pinned,
+        "seconds": r.seconds,
+    })
+}
+
+fn drape_line(r: &DrapeReport) -> String {
+    format!(
+        "drape: {} frames ({}, last max speed {:.3} m/s, {:.1} s); inside the body before {} (deepest {:.1} mm), pushed out {}, after {} (deepest {:.1} mm); {} vertices pinned",
+        r.frames,
+        if r.settled { "settled" } else { "frame budget reached before settling" },
+        r.max_speeds.last().copied().unwrap_or(0.0),
+        r.seconds,
+        r.before.count,
+        r.before.max_depth * 1e3,
+        r.pushed_out,
+        r.after.count,
+        r.after.max_depth * 1e3,
+        r.pinned
+    )
+}
+
+fn resize_line(r: &ResizeReport) -> String {
+    format!(
+        "resize: moved {:.1} mm on average (largest {:.1} mm); inside the new body {} before push-out, pushed out {} (largest {:.1} mm), inside after {}",
+        r.mean_displacement * 1e3,
+        r.max_displacement * 1e3,
+        r.before_push_out.count,
+        r.pushed_out,
+        r.max_push * 1e3,
+        r.after.count
+    )
+}
+
+fn run_resize(a: &ResizeArgs) -> Result<()> {
+    let (model, name) = load_body(a.garment.body.as_deref())?;
+    let from = parse_betas("from-betas", a.from_betas.as_deref(), &model, &name)?;
+    let to = parse_betas("to-betas", Some(&a.to_betas), &model, &name)?;
+    let g = read_garment(&a.garment.garment)?;
+    let r = resize(
+        &g.mesh,
+        &fit_body(&model, &from, &name)?,
+        &fit_body(&model, &to, &name)?,
+        &ResizeOptions::default(),
+    )?;
+    write_garment(&a.garment.garment, &g, &r.positions, &a.out)?;
+    write_report(a.report.as_deref(), &json!({ "resize": resize_json(&r) }))?;
+    emit(&format!("{}\nwrote {}", resize_line(&r), a.out.display()))
+}
+
+fn run_drape(a: &DrapeArgs) -> Result<()> {
+    let (model, name) = load_body(a.garment.body.as_deref())?;
+    let betas = parse_betas("betas", a.betas.as_deref(), &model, &name)?;
+    let (options, material) = drape_options(&a.drape)?;
+    let g = read_garment(&a.garment.garment)?;
+    let r = drape(
+        &g.mesh,
+        &fit_body(&model, &betas, &name)?,
+        &material,
+        &options,
+    )?;
+    write_garment(&a.garment.garment, &g, &r.positions, &a.out)?;
+    write_report(a.report.as_deref(), &json!({ "drape": drape_json(&r) }))?;
+    emit(&format!("{}\nwrote {}", drape_line(&r), a.out.display()))
+}
+
+fn run_prepare(a: &PrepareArgs) -> Result<()> {
+    let (model, name) = load_body(a.garment.body.as_deref())?;
+    let from = parse_betas("from-betas", a.from_betas.as_deref(), &model, &name)?;
+    let to = parse_betas("betas", a.betas.as_deref(), &model, &name)?;
+    let (options, material) = drape_options(&a.drape)?;
+    let g = read_garment(&a.garment.garment)?;
+    let body = fit_body(&model, &to, &name)?;
+    let mut lines = Vec::new();
+    let mut report = serde_json::Map::new();
+    let mut mesh = g.mesh.clone();
+    if from != to {
+        let r = resize(
+            &mesh,
+            &fit_body(&model, &from, &name)?,
+            &body,
+            &ResizeOptions::default(),
+        )?;
+        lines.push(resize_line(&r));
+        report.insert("resize".into(), resize_json(&r));
+        mesh.positions = r.positions;
+    }
+    if !a.no_drape {
+        let r = drape(&mesh, &body, &material, &options)?;
+        lines.push(drape_line(&r));
+        report.insert("drape".into(), drape_json(&r));
+        mesh.positions = r.positions;
+    }
+    write_garment(&a.garment.garment, &g, &mesh.positions, &a.out)?;
+    lines.push(format!("wrote {}", a.out.display()));
+    if let Some(path) = &a.weights {
+        let w = body.weights_at(&model, &mesh.positions)?;
+        let shape = [w.vertex_count(), w.joint_count()];
+        weft_mesh::export::npy::write_npy(path, &shape, &w.to_f32())?;
+        lines.push(format!(
+            "wrote {}: skinning weights, {} vertices × {} joints",
+            path.display(),
+            shape[0],
+            shape[1]
+        ));
+    }
+    write_report(a.report.as_deref(), &serde_json::Value::Object(report))?;
+    emit(&lines.join("\n"))
 }

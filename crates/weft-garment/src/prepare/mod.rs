@@ -22,6 +22,9 @@ pub use drape::{drape, DrapeOptions, DrapeReport};
 pub use error::PrepareError;
 pub use objtext::write_positions_into_obj;
 pub use resize::{resize, ResizeOptions, ResizeReport};
+// The simulator types of the drape's interface, so callers need no weft-sim dependency
+// of their own (and never a second version of it).
+pub use weft_sim::{Material, Penetration, SimOptions};
 
 #[cfg(test)]
 mod tests;

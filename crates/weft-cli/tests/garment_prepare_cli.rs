@@ -1,0 +1,248 @@
+//! `weft garment resize | drape | prepare` end to end on small garments and the
+//! default body: outputs written, UVs kept, weights shaped and normalised, reports
+//! consistent, bad input one line of error.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn weft(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_weft"))
+        .args(args)
+        .output()
+        .expect("run weft")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = weft(args);
+    assert!(
+        out.status.success(),
+        "weft {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn fails(args: &[&str]) -> String {
+    let out = weft(args);
+    assert!(!out.status.success(), "weft {args:?} should fail");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
+struct Dir(PathBuf);
+
+impl Dir {
+    fn new(name: &str) -> Self {
+        let d = std::env::temp_dir().join(format!(
+            "weft-garment-prepare-{name}-{}",
+            std::process::id()
+        ));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).expect("temp dir");
+        Dir(d)
+    }
+    fn path(&self, f: &str) -> String {
+        self.0.join(f).display().to_string()
+    }
+}
+
+impl Drop for Dir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn vt_lines(path: &str) -> Vec<String> {
+    std::fs::read_to_string(path)
+        .expect("read obj")
+        .lines()
+        .filter(|l| l.starts_with("vt ") || l.starts_with("f "))
+        .map(str::to_owned)
+        .collect()
+}
+
+fn json(path: &str) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).expect("report")).expect("json")
+}
+
+#[test]
+fn resize_then_prepare_with_weights() {
+    let d = Dir::new("resize");
+    let (g, r, p, w, rep) = (
+        d.path("g.obj"),
+        d.path("r.obj"),
+        d.path("p.obj"),
+        d.path("w.npy"),
+        d.path("report.json"),
+    );
+    ok(&[
+        "garment",
+        "generate",
+        "--kind",
+        "tshirt",
+        "--vertices",
+        "400",
+        "--out",
+        &g,
+    ]);
+    let out = ok(&[
+        "garment",
+        "resize",
+        "--garment",
+        &g,
+        "--to-betas",
+        "1.5,-1",
+        "--out",
+        &r,
+        "--report",
+        &rep,
+    ]);
+    assert!(
+        out.contains("resize: moved") && out.contains("wrote"),
+        "{out}"
+    );
+    // Only positions change: UVs and faces are the input's, byte for byte.
+    assert_eq!(vt_lines(&g), vt_lines(&r));
+    let report = json(&rep);
+    assert_eq!(report["resize"]["inside_after"], 0, "{report}");
+    assert!(report["resize"]["mean_displacement_m"].as_f64().unwrap() > 0.005);
+
+    // Back to β = 0, draped for a few frames, with weights.
+    let out = ok(&[
+        "garment",
+        "prepare",
+        "--garment",
+        &r,
+        "--from-betas",
+        "1.5,-1",
+        "--frames",
+        "3",
+        "--out",
+        &p,
+        "--weights",
+        &w,
+        "--report",
+        &rep,
+    ]);
+    assert!(
+        out.contains("resize:") && out.contains("drape: 3 frames"),
+        "{out}"
+    );
+    let report = json(&rep);
+    assert_eq!(report["drape"]["frames"], 3);
+    assert_eq!(
+        report["drape"]["deeper_than_threshold_after"], 0,
+        "{report}"
+    );
+    let mesh = weft_mesh::io::read_mesh(Path::new(&p)).expect("prepared mesh");
+    let npy = weft_mesh::export::npy::read_npy(Path::new(&w)).expect("weights");
+    assert_eq!(npy.shape, vec![mesh.vertex_count(), 24]);
+    let weft_mesh::export::npy::NpyData::F32(data) = npy.data else {
+        panic!("weights are not float32")
+    };
+    for row in data.chunks(24) {
+        let s: f32 = row.iter().sum();
+        assert!(
+            (s - 1.0).abs() < 1e-4 && row.iter().all(|&x| x >= 0.0),
+            "{row:?}"
+        );
+    }
+}
+
+#[test]
+fn drape_writes_ply_and_reports() {
+    let d = Dir::new("drape");
+    let (g, out_ply, rep) = (d.path("g.obj"), d.path("d.ply"), d.path("d.json"));
+    ok(&[
+        "garment",
+        "generate",
+        "--kind",
+        "skirt",
+        "--vertices",
+        "300",
+        "--out",
+        &g,
+    ]);
+    let out = ok(&[
+        "garment",
+        "drape",
+        "--garment",
+        &g,
+        "--frames",
+        "2",
+        "--material",
+        "silk",
+        "--out",
+        &out_ply,
+        "--report",
+        &rep,
+    ]);
+    assert!(out.contains("drape: 2 frames"), "{out}");
+    let a = weft_mesh::io::read_mesh(Path::new(&g)).unwrap();
+    let b = weft_mesh::io::read_mesh(Path::new(&out_ply)).unwrap();
+    assert_eq!(a.faces, b.faces);
+    assert!(json(&rep)["drape"]["pinned"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn bad_input_is_one_line_of_error() {
+    let d = Dir::new("bad");
+    let g = d.path("g.obj");
+    ok(&[
+        "garment",
+        "generate",
+        "--kind",
+        "skirt",
+        "--vertices",
+        "300",
+        "--out",
+        &g,
+    ]);
+    let out = d.path("o.obj");
+    let e = fails(&[
+        "garment",
+        "drape",
+        "--garment",
+        &g,
+        "--material",
+        "tweed",
+        "--out",
+        &out,
+    ]);
+    assert!(e.contains("tweed"), "{e}");
+    let e = fails(&[
+        "garment",
+        "resize",
+        "--garment",
+        &g,
+        "--to-betas",
+        "1,x",
+        "--out",
+        &out,
+    ]);
+    assert!(e.contains("--to-betas"), "{e}");
+    let e = fails(&[
+        "garment",
+        "drape",
+        "--garment",
+        &g,
+        "--frames",
+        "0",
+        "--out",
+        &out,
+    ]);
+    assert!(e.contains("max_frames"), "{e}");
+    let e = fails(&[
+        "garment",
+        "resize",
+        "--garment",
+        &d.path("missing.obj"),
+        "--to-betas",
+        "1",
+        "--out",
+        &out,
+    ]);
+    assert!(e.contains("missing.obj"), "{e}");
+    assert!(!Path::new(&out).exists());
+}
