@@ -196,17 +196,18 @@ impl Multilevel {
 
     /// `X^fuse` of a garment–body pair (eq. 4–5); compute once, reuse for every window.
     pub fn encode_pair(&self, g: &GarmentInput) -> Result<PairEncoding, ModelError> {
+        let n = g.vertex_count();
         let x = tensor2(
             &g.node_features,
-            [g.vertex_count(), self.config.node_features()],
+            [n, g.node_feature_width()],
             &self.device(),
         );
         self.encode_pair_features(g, x)
     }
 
-    /// [`Self::encode_pair`] with the garment graph's node features `X` (`[N, 6 + S]`)
-    /// given as a tensor: the attribution of seed 000 §4.1 (weft-eval) differentiates
-    /// the prediction with respect to `X`.
+    /// [`Self::encode_pair`] with the node features `X` given as a tensor (`[N, 6 + S]`)
+    /// instead of `g.node_features`: attribution (seed 000 §4.1, eq. 9) differentiates the
+    /// output with respect to `X` and evaluates it along a path of scaled features.
     pub fn encode_pair_features(
         &self,
         g: &GarmentInput,
@@ -218,7 +219,7 @@ impl Multilevel {
         let n = g.vertex_count();
         if x.dims() != [n, cfg.node_features()] {
             return Err(ModelError::mismatch(
-                "node feature tensor shape (garment vertices × 6 + joints)",
+                "node feature tensor (garment vertices × (6 + joints))",
                 format!("{:?}", [n, cfg.node_features()]),
                 format!("{:?}", x.dims()),
             ));
