@@ -38,7 +38,8 @@ pub struct Record {
     /// Mean vertex error on the validation split, mm (steps that measured it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub validation_mm: Option<f64>,
-    /// `non_finite` for a skipped step, `phase` when the schedule switched.
+    /// `start` for the validation before the first step (step 0), `non_finite` for a
+    /// skipped step, `phase:<name>` when the schedule switched.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub event: Option<String>,
     /// The term that was not finite, for `non_finite`.

@@ -417,6 +417,59 @@ impl MultilevelTask {
     }
 }
 
+/// A sequence whose "simulated" frames are the rest garment carried by the root
+/// translation (with no simulation behind it): for smoke tests and benchmarks of the
+/// training step, where only shapes and cost matter. `poses` and `trans` give the
+/// frame count.
+pub fn carried_sequence(
+    id: &str,
+    garment: weft_mesh::TriMesh,
+    poses: Vec<[f32; 72]>,
+    trans: Vec<[f32; 3]>,
+    fps: f64,
+) -> Sequence {
+    let positions: Vec<Vec<[f32; 3]>> = trans
+        .iter()
+        .map(|tr| {
+            garment
+                .positions
+                .iter()
+                .map(|q| std::array::from_fn(|k| q[k] as f32 + tr[k]))
+                .collect()
+        })
+        .collect();
+    let frames = positions.len();
+    let record = weft_data::SequenceRecord {
+        id: id.into(),
+        index: 0,
+        split: Split::Train,
+        shard: String::new(),
+        stats: String::new(),
+        garment_id: id.into(),
+        garment_kind: String::new(),
+        vertices: garment.vertex_count(),
+        faces: garment.face_count(),
+        body_id: "mean".into(),
+        betas: Vec::new(),
+        motion_id: id.into(),
+        frame_range: [0, frames],
+        material: String::new(),
+        fps,
+        frames,
+        status: weft_data::Status::Done,
+        diverged_at: None,
+        message: None,
+    };
+    Sequence {
+        record,
+        corner_uvs: Vec::new(),
+        garment,
+        poses,
+        trans,
+        positions,
+    }
+}
+
 /// Positions of a `[T, N, 3]` tensor on the host, f64, frame-major.
 fn host_positions(x: &Tensor<3>) -> Result<Vec<[f64; 3]>> {
     let v = x

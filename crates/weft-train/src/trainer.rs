@@ -179,6 +179,20 @@ pub fn train<T: TrainTask>(
     );
     bar.set_position(state.step as u64);
 
+    // The error before any training (for Multilevel: close to LBS with the transferred
+    // weights, which the untrained model starts from), logged as step 0.
+    if !options.resume && cfg.validate_every > 0 {
+        let v = task.validate(&model.valid())?;
+        state.validation_mm = Some(v);
+        log.push(Record {
+            phase: state.schedule.phase.name().into(),
+            lr: cfg.learning_rate,
+            validation_mm: Some(v),
+            event: Some("start".into()),
+            ..Record::default()
+        })?;
+    }
+
     let mut good: (T::Model, ModuleOptimizer) = (model.clone(), optim.clone());
     let mut skipped = 0usize;
     let mut session_ms = 0.0;

@@ -8,17 +8,16 @@ use std::path::PathBuf;
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::Tensor;
 use weft_body::motion::{generate, MotionKind, ProceduralParams};
-use weft_data::{SequenceRecord, Split, Status};
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_models::multilevel::{Multilevel, MultilevelConfig, Predictor};
 use weft_nn::backend::{cpu_autodiff, seeded};
+use weft_train::multilevel::carried_sequence;
 use weft_train::{train, MultilevelTask, Phase, RunDir, RunOptions, TrainConfig};
 
 const FRAMES: usize = 8;
 
 /// A skirt on the default body following a procedural walk; the "simulated" frames are
-/// the rest garment carried by the root translation with a small sway, enough for the
-/// losses to have something to fit.
+/// the rest garment carried by the root translation.
 fn sequence(id: &str, seed: u64) -> (weft_body::BodyModel, weft_data::Sequence) {
     let body = weft_body::default_body().expect("default body");
     let fit = FitBody::new(&body, &[]).expect("fit");
@@ -38,54 +37,7 @@ fn sequence(id: &str, seed: u64) -> (weft_body::BodyModel, weft_data::Sequence) 
         .iter()
         .map(|p| std::array::from_fn(|k| p[k / 3][k % 3]))
         .collect();
-    let trans = motion.trans().to_vec();
-    let positions: Vec<Vec<[f32; 3]>> = trans
-        .iter()
-        .enumerate()
-        .map(|(t, tr)| {
-            garment
-                .positions
-                .iter()
-                .map(|q| {
-                    let sway = 0.01 * (0.7 * t as f64).sin() * q[1];
-                    [
-                        (q[0] + sway) as f32 + tr[0],
-                        q[1] as f32 + tr[1],
-                        q[2] as f32 + tr[2],
-                    ]
-                })
-                .collect()
-        })
-        .collect();
-    let record = SequenceRecord {
-        id: id.into(),
-        index: 0,
-        split: Split::Train,
-        shard: String::new(),
-        stats: String::new(),
-        garment_id: "skirt".into(),
-        garment_kind: "skirt".into(),
-        vertices: garment.vertex_count(),
-        faces: garment.face_count(),
-        body_id: "mean".into(),
-        betas: Vec::new(),
-        motion_id: "walk".into(),
-        frame_range: [0, FRAMES],
-        material: "cotton".into(),
-        fps: motion.fps(),
-        frames: FRAMES,
-        status: Status::Done,
-        diverged_at: None,
-        message: None,
-    };
-    let seq = weft_data::Sequence {
-        record,
-        corner_uvs: Vec::new(),
-        garment,
-        poses,
-        trans,
-        positions,
-    };
+    let seq = carried_sequence(id, garment, poses, motion.trans().to_vec(), motion.fps());
     (body, seq)
 }
 
