@@ -7,6 +7,7 @@
 //! - [`evaluate`]: `weft eval` — a run on a dataset split against the baseline.
 //! - [`explain`]: eq. 9 for one vertex of the Multilevel model (`weft attribute`).
 //! - [`animate`]: `weft animate` — any garment, shape and motion, exported.
+//! - [`demo`]: `weft demo` — data, training, evaluation, animation, attribution.
 //! - [`report`]: `eval.json` / `eval.md` and the Table 1 comparison.
 //! - [`pictures`]: comparison sheets, error and attribution heat maps, per-frame plots.
 //! - [`stats`]: mean ± std in one pass.
@@ -16,6 +17,7 @@
 pub mod animate;
 pub mod attribution;
 pub mod baseline;
+pub mod demo;
 pub mod error;
 pub mod evaluate;
 pub mod explain;
