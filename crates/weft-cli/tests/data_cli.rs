@@ -157,6 +157,13 @@ fn info_shows_splits_and_diverged_sequences() {
     ] {
         assert!(text.contains(needle), "{needle:?} missing in\n{text}");
     }
+    let o = weft(&["data", "info", s(&dir), "--verify"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("verified: 4 shards, 7 frames"),
+        "{}",
+        stdout(&o)
+    );
     let o = weft(&["data", "info", s(&dir), "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();

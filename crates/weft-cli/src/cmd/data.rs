@@ -51,6 +51,9 @@ pub struct InfoArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
+    /// Also load every shard and check it against the manifest (fails if any is broken).
+    #[arg(long)]
+    verify: bool,
 }
 
 #[derive(Args)]
@@ -116,10 +119,21 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
 }
 
 fn run_info(a: &InfoArgs) -> Result<()> {
-    let info = DatasetInfo::of(&a.dir)?;
+    let mut info = DatasetInfo::of(&a.dir)?;
+    if a.verify {
+        info.verify(&a.dir)?;
+    }
     if a.json {
-        emit(&serde_json::to_string_pretty(&info)?)
+        emit(&serde_json::to_string_pretty(&info)?)?;
     } else {
-        emit(&info.to_string())
+        emit(&info.to_string())?;
+    }
+    match &info.verified {
+        Some(v) if !v.broken.is_empty() => bail!(
+            "{} of {} shards are broken",
+            v.broken.len(),
+            v.broken.len() + v.loaded
+        ),
+        _ => Ok(()),
     }
 }
