@@ -5,6 +5,7 @@ mod attribute;
 mod body;
 mod config;
 mod data;
+mod demo;
 mod eval;
 mod export;
 mod garment;
@@ -17,6 +18,10 @@ use clap::Subcommand;
 
 #[derive(Subcommand)]
 pub enum Command {
+    /// Start here: builds the tiny dataset, trains the cpu preset, evaluates it against
+    /// the LBS-only baseline, animates an unseen garment and writes a report (in
+    /// ./weft-demo unless --out says otherwise; about 20 minutes).
+    Demo(demo::DemoArgs),
     /// Inspect meshes and build their multilevel graph hierarchies.
     #[command(subcommand)]
     Mesh(mesh::MeshCommand),
@@ -55,6 +60,7 @@ pub enum Command {
 
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
+        Command::Demo(a) => demo::run(&a),
         Command::Mesh(c) => mesh::run(c),
         Command::Body(c) => body::run(c),
         Command::Motion(c) => motion::run(c),
