@@ -40,7 +40,7 @@ use weft_mesh::{Hinge, Topology, TriMesh};
 use crate::energy::{Energy, HessianKind};
 use crate::error::{check_count, check_len, check_nonneg, check_vertex, SimError};
 use crate::math::{axpy3, project_psd12, skew, v3};
-use crate::sparse::BlockCsr;
+use crate::sparse::{BlockCsr, ElementSlots};
 
 /// How the per-hinge weight `w_e` is computed from the rest shape.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -81,6 +81,8 @@ pub struct Bending {
 type V12 = SVector<f64, 12>;
 type M12 = SMatrix<f64, 12, 12>;
 type J = SMatrix<f64, 3, 12>;
+/// A hinge's Newton block and its storage slots.
+type HingeBlock = (M12, ElementSlots<4>);
 
 /// Orders a hinge's vertices as `[x0, x1, x2, x3]` with `x0 → x1` in the winding of the
 /// first face.
@@ -335,7 +337,8 @@ impl Energy for Bending {
         check_len("positions", self.vertex_count, x.len())?;
         Ok(self
             .hinges
-            .iter()
+            .par_iter()
+            .with_min_len(256)
             .filter_map(|h| {
                 let g = geometry(&self.local(h, x))?;
                 Some(h.coefficient * wrapped(g.theta, h.rest_angle).powi(2))
@@ -351,13 +354,23 @@ impl Energy for Bending {
     ) -> Result<f64, SimError> {
         check_len("positions", self.vertex_count, x.len())?;
         check_len("gradient", self.vertex_count, grad.len())?;
+        // Hinge gradients in parallel, scatter serial.
+        let per_hinge: Vec<Option<(f64, V12)>> = self
+            .hinges
+            .par_iter()
+            .with_min_len(256)
+            .map(|h| {
+                let p = self.local(h, x);
+                let g = geometry(&p)?;
+                let d = wrapped(g.theta, h.rest_angle);
+                let gt = angle_gradient(&g, &p) * (2.0 * h.coefficient * d * scale);
+                Some((h.coefficient * d * d, gt))
+            })
+            .collect();
         let mut e = 0.0;
-        for h in &self.hinges {
-            let p = self.local(h, x);
-            let Some(g) = geometry(&p) else { continue };
-            let d = wrapped(g.theta, h.rest_angle);
-            e += h.coefficient * d * d;
-            let gt = angle_gradient(&g, &p) * (2.0 * h.coefficient * d * scale);
+        for (h, r) in self.hinges.iter().zip(per_hinge) {
+            let Some((eh, gt)) = r else { continue };
+            e += eh;
             for (a, &v) in h.verts.iter().enumerate() {
                 axpy3(
                     &mut grad[v as usize],
@@ -379,25 +392,34 @@ impl Energy for Bending {
         check_len("positions", self.vertex_count, x.len())?;
         check_len("hessian", self.vertex_count, hess.block_rows())?;
         // Hinge matrices (and their eigen-projections) in parallel, serial scatter.
-        let blocks: Vec<Option<M12>> = self
+        let blocks: Vec<Result<Option<HingeBlock>, SimError>> = self
             .hinges
             .par_iter()
             .map(|h| {
+                let slots = hess.element_slots(&h.verts)?;
                 let p = self.local(h, x);
-                let g = geometry(&p)?;
+                let Some(g) = geometry(&p) else {
+                    return Ok(None);
+                };
                 let d = wrapped(g.theta, h.rest_angle);
                 let gt = angle_gradient(&g, &p);
-                let m = (gt * gt.transpose() + angle_hessian(&g, &p) * d) * (2.0 * h.coefficient);
-                Some(if kind == HessianKind::Projected {
+                let gauss_newton = gt * gt.transpose();
+                if kind == HessianKind::Surrogate {
+                    // Rank one and PSD; exact at the rest angle.
+                    return Ok(Some((gauss_newton * (2.0 * h.coefficient), slots)));
+                }
+                let m = (gauss_newton + angle_hessian(&g, &p) * d) * (2.0 * h.coefficient);
+                let m = if kind == HessianKind::Projected {
                     project_psd12(&m)
                 } else {
                     m
-                })
+                };
+                Ok(Some((m, slots)))
             })
             .collect();
-        for (h, m) in self.hinges.iter().zip(&blocks) {
-            if let Some(m) = m {
-                hess.add_element(&h.verts, m, scale)?;
+        for b in blocks {
+            if let Some((m, slots)) = b? {
+                hess.add_element_at(&slots, &m, scale);
             }
         }
         Ok(())

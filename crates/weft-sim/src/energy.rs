@@ -22,6 +22,15 @@ pub enum HessianKind {
     /// a descent direction. Terms whose exact Hessian is already PSD return it unchanged.
     #[default]
     Projected,
+    /// A cheaper positive semi-definite stand-in for Newton's matrix, built without
+    /// eigen-decompositions of element blocks: membranes keep their (PSD) material part
+    /// and use the positive part of the 2×2 stress in the geometric part (exact under
+    /// tension, StVK), bending keeps the Gauss–Newton part `2kw ∇θ∇θᵀ`, and other terms
+    /// project their small F-space (6×6) Hessian or are already PSD. Not a derivative:
+    /// Newton with it still minimises the exact energy (the line search uses the exact
+    /// value and gradient), only its convergence rate differs. Measured in
+    /// `docs/physics.md`.
+    Surrogate,
 }
 
 /// An energy over the positions of a garment with `vertex_count()` vertices.

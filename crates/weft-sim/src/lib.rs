@@ -59,5 +59,5 @@ pub use sequence::{
     simulate_sequence, FrameStats, SequenceError, SequenceOptions, SimulatedSequence,
 };
 pub use solver::{ClothSimulator, NewtonOptions, SimOptions};
-pub use sparse::{BlockCsr, PatternBuilder};
+pub use sparse::{BlockCsr, ElementSlots, PatternBuilder};
 pub use stretch::{Stretch, StretchParams};

@@ -53,6 +53,7 @@ macro_rules! project_psd_fn {
     };
 }
 
+project_psd_fn!(project_psd6, 6);
 project_psd_fn!(project_psd9, 9);
 project_psd_fn!(project_psd12, 12);
 

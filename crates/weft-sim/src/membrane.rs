@@ -20,12 +20,15 @@ use rayon::prelude::*;
 use weft_mesh::TriMesh;
 
 use crate::error::{check_count, check_len, check_vertex, SimError};
-use crate::math::{finite3, project_psd9, v3};
-use crate::sparse::BlockCsr;
+use crate::math::{finite3, project_psd6, project_psd9, v3};
+use crate::sparse::{BlockCsr, ElementSlots};
 use crate::HessianKind;
 
 /// `∂²ψ/∂F²` as a 6×6 matrix, entry `(k + 3j, l + 3m)` = `∂²ψ/∂F_kj ∂F_lm`.
 pub(crate) type FHessian = SMatrix<f64, 6, 6>;
+
+/// A face's Newton block and its storage slots.
+type FaceBlock = (SMatrix<f64, 9, 9>, ElementSlots<3>);
 
 /// Rest frames of all faces of a garment: per face the three `g_a` and the rest area.
 #[derive(Clone, Debug, PartialEq)]
@@ -241,22 +244,29 @@ pub(crate) trait MembraneDensity {
     fn psi_and_stress(&self, f: usize, fgrad: &Matrix3x2<f64>) -> (f64, Matrix3x2<f64>);
     /// `K = ∂²ψ/∂F²`.
     fn stiffness(&self, f: usize, fgrad: &Matrix3x2<f64>) -> FHessian;
+    /// A PSD stand-in for `K` ([`HessianKind::Surrogate`]); by default `K` projected
+    /// (6×6, cheaper than projecting the 9×9 vertex block: `K ⪰ 0` makes `GᵀKG ⪰ 0`).
+    fn surrogate_stiffness(&self, f: usize, fgrad: &Matrix3x2<f64>) -> FHessian {
+        project_psd6(&self.stiffness(f, fgrad))
+    }
 }
 
 /// `Σ_f A_f ψ_f(F_f)`.
-pub(crate) fn membrane_value<D: MembraneDensity>(
+pub(crate) fn membrane_value<D: MembraneDensity + Sync>(
     frames: &RestFrames,
     d: &D,
     x: &[[f64; 3]],
 ) -> Result<f64, SimError> {
     frames.check_positions(x)?;
     Ok((0..frames.faces.len())
+        .into_par_iter()
+        .with_min_len(256)
         .map(|f| frames.area[f] * d.psi(f, &frames.deformation_gradient(f, x)))
         .sum())
 }
 
 /// Adds `scale · ∇E` and returns `E`.
-pub(crate) fn membrane_gradient<D: MembraneDensity>(
+pub(crate) fn membrane_gradient<D: MembraneDensity + Sync>(
     frames: &RestFrames,
     d: &D,
     x: &[[f64; 3]],
@@ -265,11 +275,16 @@ pub(crate) fn membrane_gradient<D: MembraneDensity>(
 ) -> Result<f64, SimError> {
     frames.check_positions(x)?;
     check_len("gradient", frames.vertex_count, grad.len())?;
+    // Stresses in parallel, scatter serial (three adds per face).
+    let stresses: Vec<(f64, Matrix3x2<f64>)> = (0..frames.faces.len())
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|f| d.psi_and_stress(f, &frames.deformation_gradient(f, x)))
+        .collect();
     let mut e = 0.0;
-    for f in 0..frames.faces.len() {
-        let (psi, p) = d.psi_and_stress(f, &frames.deformation_gradient(f, x));
+    for (f, (psi, p)) in stresses.iter().enumerate() {
         e += frames.area[f] * psi;
-        frames.scatter_gradient(f, &p, scale, grad);
+        frames.scatter_gradient(f, p, scale, grad);
     }
     Ok(e)
 }
@@ -285,22 +300,26 @@ pub(crate) fn membrane_hessian<D: MembraneDensity + Sync>(
 ) -> Result<(), SimError> {
     frames.check_positions(x)?;
     check_len("hessian", frames.vertex_count, hess.block_rows())?;
-    // Element matrices (and their eigen-projections, the bulk of the cost) in
-    // parallel; the scatter stays serial.
-    let blocks: Vec<SMatrix<f64, 9, 9>> = (0..frames.faces.len())
+    // Element matrices (and their eigen-projections, the bulk of the cost) and their
+    // storage slots in parallel; the serial scatter only adds.
+    let blocks: Vec<Result<FaceBlock, SimError>> = (0..frames.faces.len())
         .into_par_iter()
         .map(|f| {
-            let k = d.stiffness(f, &frames.deformation_gradient(f, x));
-            let h = frames.element_hessian(f, &k);
-            if kind == HessianKind::Projected {
-                project_psd9(&h)
-            } else {
-                h
-            }
+            let fg = frames.deformation_gradient(f, x);
+            let slots = hess.element_slots(&frames.faces[f])?;
+            let h = match kind {
+                HessianKind::Exact => frames.element_hessian(f, &d.stiffness(f, &fg)),
+                HessianKind::Projected => {
+                    project_psd9(&frames.element_hessian(f, &d.stiffness(f, &fg)))
+                }
+                HessianKind::Surrogate => frames.element_hessian(f, &d.surrogate_stiffness(f, &fg)),
+            };
+            Ok((h, slots))
         })
         .collect();
-    for (face, h) in frames.faces.iter().zip(&blocks) {
-        hess.add_element(face, h, scale)?;
+    for b in blocks {
+        let (h, slots) = b?;
+        hess.add_element_at(&slots, &h, scale);
     }
     Ok(())
 }

@@ -63,6 +63,9 @@ impl PatternBuilder {
     }
 }
 
+/// Storage slots of an element's `K × K` blocks (see [`BlockCsr::element_slots`]).
+pub type ElementSlots<const K: usize> = [[usize; K]; K];
+
 /// A square block-sparse matrix of `n × n` blocks of size 3×3 (compressed rows).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BlockCsr {
@@ -133,6 +136,47 @@ impl BlockCsr {
             }
         }
         Ok(())
+    }
+
+    /// The storage slots of the blocks `(verts[a], verts[b])` of an element, row-major
+    /// over `(a, b)`: looked up (binary search) where the element matrix is computed,
+    /// in parallel, so the serial scatter of [`BlockCsr::add_element_at`] only adds.
+    pub fn element_slots<const K: usize>(
+        &self,
+        verts: &[u32; K],
+    ) -> Result<[[usize; K]; K], SimError> {
+        let mut out = [[0; K]; K];
+        for (a, &va) in verts.iter().enumerate() {
+            for (b, &vb) in verts.iter().enumerate() {
+                out[a][b] =
+                    self.position(va as usize, vb as usize)
+                        .ok_or(SimError::NotInPattern {
+                            row: va as usize,
+                            col: vb as usize,
+                        })?;
+            }
+        }
+        Ok(out)
+    }
+
+    /// Adds a dense element matrix (`R = 3K`, vertex-major) times `scale` into the
+    /// slots from [`BlockCsr::element_slots`] of the same matrix.
+    pub fn add_element_at<const K: usize, const R: usize>(
+        &mut self,
+        slots: &ElementSlots<K>,
+        m: &SMatrix<f64, R, R>,
+        scale: f64,
+    ) {
+        for (a, row) in slots.iter().enumerate() {
+            for (b, &k) in row.iter().enumerate() {
+                let v = &mut self.values[k];
+                for r in 0..3 {
+                    for c in 0..3 {
+                        v[(r, c)] += scale * m[(3 * a + r, 3 * b + c)];
+                    }
+                }
+            }
+        }
     }
 
     /// `y = A x`.

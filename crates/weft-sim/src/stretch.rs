@@ -114,6 +114,35 @@ impl MembraneDensity for Stretch {
         let p = self.params[f];
         let e = green(fg);
         let s = e * (2.0 * p.mu) + Matrix2::identity() * (p.lambda * e.trace());
+        self.stiffness_with_stress(f, fg, &s)
+    }
+
+    /// `dP = dF S⁺ + F dS`: the material part `F dS` is PSD for `μ, λ >= 0`
+    /// (`⟨FᵀdF, dS⟩ = 2μ‖dE‖² + λ tr(dE)²`) and the geometric part `dF S⁺` is PSD with the
+    /// positive part `S⁺` of the stress, so no eigen-decomposition of the 6×6 is needed;
+    /// under tension (`S ⪰ 0`) this is the exact `K`.
+    fn surrogate_stiffness(&self, f: usize, fg: &Matrix3x2<f64>) -> FHessian {
+        let p = self.params[f];
+        let e = green(fg);
+        let s = e * (2.0 * p.mu) + Matrix2::identity() * (p.lambda * e.trace());
+        let eig = s.symmetric_eigen();
+        let mut plus = Matrix2::zeros();
+        for k in 0..2 {
+            let l = eig.eigenvalues[k];
+            if l > 0.0 {
+                let q = eig.eigenvectors.column(k);
+                plus += q * q.transpose() * l;
+            }
+        }
+        self.stiffness_with_stress(f, fg, &plus)
+    }
+}
+
+impl Stretch {
+    /// `K` with the stress of the geometric term `dF S` given (`S` itself for the exact
+    /// Hessian, its positive part for the surrogate).
+    fn stiffness_with_stress(&self, f: usize, fg: &Matrix3x2<f64>, s: &Matrix2<f64>) -> FHessian {
+        let p = self.params[f];
         let mut k = FHessian::zeros();
         for j in 0..2 {
             for kk in 0..3 {
@@ -163,5 +192,65 @@ impl Energy for Stretch {
     }
     fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
         face_stencils(&self.frames, f)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::energy::hessian_of;
+    use crate::Bending;
+    use weft_mesh::primitives::grid;
+
+    fn min_max_eigen(h: &BlockCsr) -> (f64, f64) {
+        let d = h.to_dense();
+        let e = d.symmetric_eigen().eigenvalues;
+        (e.min(), e.max())
+    }
+
+    /// The Newton surrogate is the exact Hessian under tension, and PSD under
+    /// compression where the exact one is indefinite; bending's surrogate is PSD.
+    #[test]
+    fn surrogate_is_exact_under_tension_and_psd_always() {
+        let rest = grid(4, 4, 0.1);
+        let params = StretchParams {
+            mu: 1e5,
+            lambda: 5e4,
+            thickness: 1e-3,
+        };
+        let s = Stretch::uniform(&rest, params).unwrap();
+        let scaled = |a: f64, b: f64| -> Vec<[f64; 3]> {
+            rest.positions
+                .iter()
+                .map(|p| [a * p[0], 0.0, b * p[2]])
+                .collect()
+        };
+        let tense = scaled(1.1, 1.05);
+        let exact = hessian_of(&s, &tense, HessianKind::Exact)
+            .unwrap()
+            .to_dense();
+        let surrogate = hessian_of(&s, &tense, HessianKind::Surrogate)
+            .unwrap()
+            .to_dense();
+        assert!((&exact - &surrogate).norm() <= 1e-12 * exact.norm());
+        let squashed = scaled(0.8, 0.9);
+        let (lo, _) = min_max_eigen(&hessian_of(&s, &squashed, HessianKind::Exact).unwrap());
+        assert!(
+            lo < 0.0,
+            "the exact Hessian is indefinite under compression"
+        );
+        let (lo, hi) = min_max_eigen(&hessian_of(&s, &squashed, HessianKind::Surrogate).unwrap());
+        assert!(lo >= -1e-10 * hi, "surrogate eigenvalue {lo} (max {hi})");
+        // Bending, folded away from flat.
+        let b = Bending::uniform(&rest, 1e-3, Default::default(), Default::default()).unwrap();
+        let mut folded = rest.positions.clone();
+        for p in &mut folded {
+            p[1] = 0.3 * (p[0] - 0.15).abs() + 0.2 * p[2] * p[2];
+        }
+        let (lo, hi) = min_max_eigen(&hessian_of(&b, &folded, HessianKind::Surrogate).unwrap());
+        assert!(
+            lo >= -1e-10 * hi.max(1e-30),
+            "bending surrogate eigenvalue {lo}"
+        );
     }
 }

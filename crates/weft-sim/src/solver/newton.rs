@@ -31,6 +31,14 @@ pub struct NewtonOptions {
     pub armijo: f64,
     /// At most this many step halvings.
     pub max_halvings: usize,
+    /// Newton's matrix: [`HessianKind::Surrogate`] (default: no element eigen-
+    /// decompositions, measured fastest per step) or [`HessianKind::Projected`].
+    pub hessian: HessianKind,
+    /// Loosest PCG relative residual of the forcing sequence: iteration `k` solves to
+    /// `max(cg_rtol, min(cg_rtol_loose, ‖g_k‖∞/‖g_0‖∞))`, so early iterations, far
+    /// from the minimum, take a rough direction cheaply (inexact Newton,
+    /// Eisenstat–Walker). Set it equal to `cg_rtol` for a fixed tolerance.
+    pub cg_rtol_loose: f64,
 }
 
 impl Default for NewtonOptions {
@@ -42,6 +50,8 @@ impl Default for NewtonOptions {
             cg_max_iterations: 1000,
             armijo: 1e-4,
             max_halvings: 30,
+            hessian: HessianKind::Surrogate,
+            cg_rtol_loose: 1e-2,
         }
     }
 }
@@ -103,16 +113,18 @@ pub fn minimize(
     }
     report.energies.push(e);
     let mut trial = x.to_vec();
+    let g0 = max_abs(&g).max(f64::MIN_POSITIVE);
     for _ in 0..opts.max_iterations {
         report.iterations += 1;
-        potential.hessian_into(x, HessianKind::Projected, hess)?;
+        potential.hessian_into(x, opts.hessian, hess)?;
         for (i, &pin) in pinned.iter().enumerate() {
             if pin {
                 hess.pin(i);
             }
         }
         let rhs: Vec<[f64; 3]> = g.iter().map(|v| v.map(|c| -c)).collect();
-        let (mut d, cg) = pcg(hess, &rhs, opts.cg_rtol, opts.cg_max_iterations)?;
+        let rtol = (max_abs(&g) / g0).min(opts.cg_rtol_loose).max(opts.cg_rtol);
+        let (mut d, cg) = pcg(hess, &rhs, rtol, opts.cg_max_iterations)?;
         report.cg_iterations += cg.iterations;
         let mut slope: f64 = d
             .iter()
@@ -148,6 +160,17 @@ pub fn minimize(
             report.last_step = 0.0;
             report.converged = max_abs(&d) < 10.0 * opts.tolerance;
             break;
+        }
+        if std::env::var_os("WEFT_NEWTON_TRACE").is_some() {
+            eprintln!(
+                "  it {} E {:.6e} alpha {alpha} |d| {:.2e} cg {} res {:.1e} |g| {:.2e}",
+                report.iterations,
+                e,
+                max_abs(&d),
+                cg.iterations,
+                cg.relative_residual,
+                max_abs(&g)
+            );
         }
         x.copy_from_slice(&trial);
         report.last_step = step;

@@ -248,13 +248,20 @@ impl ClothSimulator {
         if let Some(f) = self.potential.friction_mut() {
             f.set_contacts(friction)?;
         }
-        // Start from the inertial target, except where a contact is: there, from the
-        // start-of-step position carried along with the body surface under it.
+        // Start from the inertial target; where it lies closer to the body than ε
+        // (along the contact's normal), from its projection to ε instead. Keeping the
+        // tangential part keeps the start free of the stretch a jump between contact
+        // and free vertices would cause.
+        let _ = moved;
         let mut x = target;
         if let Some(c) = self.potential.collision() {
-            for (vc, m) in c.contacts().iter().zip(&moved) {
+            let eps = c.eps();
+            for vc in c.contacts() {
                 let i = vc.vertex as usize;
-                x[i] = std::array::from_fn(|k| self.x[i][k] + m[k]);
+                let d = vc.contact.signed_distance(x[i]);
+                if d < eps {
+                    x[i] = std::array::from_fn(|k| x[i][k] + (eps - d) * vc.contact.normal[k]);
+                }
             }
         }
         let report = minimize(

@@ -1,0 +1,56 @@
+//! Times a cone skirt on the default body walking: `cargo run --release -p weft-sim
+//! --example skirt_walk -- AROUND RINGS FRAMES [MATERIAL] [SUBSTEPS]`. Prints one line per
+//! frame and the mean time per frame after the warm-up.
+
+use weft_body::motion::{generate, MotionKind, ProceduralParams};
+use weft_sim::sequence::test_skirt;
+use weft_sim::{simulate_sequence, Material, SequenceOptions};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let num = |i: usize, d: usize| args.get(i).and_then(|s| s.parse().ok()).unwrap_or(d);
+    let (around, rings, frames) = (num(0, 96), num(1, 40), num(2, 30));
+    let material = Material::preset(args.get(3).map_or("cotton", String::as_str))?;
+    let body = weft_body::default_body()?;
+    let rest = body.shaped(&[])?.vertices;
+    let skirt = test_skirt(&rest, around, rings);
+    let mut p = ProceduralParams::new(MotionKind::Walk);
+    p.frames = frames;
+    let motion = generate(&p)?;
+    let mut opts = SequenceOptions {
+        substeps: num(4, SequenceOptions::default().substeps),
+        ..SequenceOptions::default()
+    };
+    if let Some(n) = std::env::var("WEFT_NEWTON_MAX")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        opts.sim.newton.max_iterations = n;
+    }
+    if let Some(r) = std::env::var("WEFT_CG_LOOSE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        opts.sim.newton.cg_rtol_loose = r;
+    }
+    println!(
+        "{} vertices, {} faces",
+        skirt.vertex_count(),
+        skirt.face_count()
+    );
+    let seq = simulate_sequence(&skirt, &material, &body, &[], &motion, &opts, &mut |s| {
+        println!(
+            "frame {:3}: {:.3} s, newton {:4}, cg {:6}, strain max {:.4} mean {:.5}, inside {} ({:.2e} m)",
+            s.frame, s.seconds, s.newton_iterations, s.cg_iterations, s.max_edge_strain,
+            s.mean_edge_strain, s.penetrations, s.max_penetration
+        )
+    })?;
+    let after: Vec<f64> = seq.stats.iter().skip(1).map(|s| s.seconds).collect();
+    println!(
+        "warm-up {:.2} s; mean {:.4} s per frame over {} frames",
+        seq.stats[0].seconds,
+        after.iter().sum::<f64>() / after.len().max(1) as f64,
+        after.len()
+    );
+    Ok(())
+}
