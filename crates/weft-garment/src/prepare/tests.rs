@@ -101,6 +101,22 @@ fn resized_template_matches_direct_generation() {
     }
 }
 
+/// Resizing to the shape the garment was made for moves nothing (beyond a hair of
+/// push-out at the margin).
+#[test]
+fn resize_to_the_same_shape_is_the_identity() {
+    let model = model();
+    let b = FitBody::new(&model, &[0.5, 0.5]).expect("β");
+    let style = Style::from_seed(GarmentKind::Dress, 4);
+    let g = b
+        .generate(GarmentKind::Dress, &style, 800)
+        .expect("dress")
+        .mesh;
+    let r = resize(&g, &b, &b, &ResizeOptions::default()).expect("resize");
+    assert!(r.max_displacement < 1e-3, "{} m", r.max_displacement);
+    assert_eq!(r.after.count, 0);
+}
+
 /// A 500-vertex skirt settles on the rest body within the frame budget, nothing ends
 /// inside the body by more than the collision threshold, and it hangs lower than the
 /// template (gravity) without sliding off the hips.
