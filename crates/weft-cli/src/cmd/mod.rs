@@ -12,6 +12,7 @@ mod garment;
 mod mesh;
 mod motion;
 mod render;
+mod simulate;
 mod train;
 
 use clap::Subcommand;
@@ -40,6 +41,9 @@ pub enum Command {
     Garment(garment::GarmentCommand),
     /// Write a frame sequence as an OBJ sequence, PC2/MDD point cache or glTF binary.
     Export(export::ExportArgs),
+    /// Simulate a garment on a body following a motion (ground truth): PC2, .npy,
+    /// OBJ sequence and per-frame statistics.
+    Simulate(simulate::SimulateArgs),
     /// Simulated datasets: generate (resumable, shardable), info, merge.
     #[command(subcommand)]
     Data(data::DataCommand),
@@ -66,6 +70,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Motion(c) => motion::run(c),
         Command::Render(a) => render::run(&a),
         Command::Export(a) => export::run(&a),
+        Command::Simulate(a) => simulate::run(&a),
         Command::Garment(c) => garment::run(c),
         Command::Data(c) => data::run(c),
         Command::Train(a) => train::run(&a),

@@ -1,0 +1,291 @@
+//! `weft simulate`: a garment simulated on a body that follows a motion, written as a
+//! PC2 point cache, an .npy array `[T, N, 3]` (f32), optionally an OBJ sequence, and a
+//! per-frame statistics JSON.
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use weft_body::default_body::DEFAULT_BODY_NAME;
+use weft_body::motion::{
+    generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams,
+};
+use weft_body::{default_body, BodyModel};
+use weft_mesh::export::{write_obj_sequence, write_pc2, Frames, Pc2Timing};
+use weft_mesh::io::{load_mesh, write_atomic};
+use weft_sim::{
+    simulate_sequence, FrameStats, Material, SequenceError, SequenceOptions, SimulatedSequence,
+};
+
+use super::emit;
+
+#[derive(Args)]
+pub struct SimulateArgs {
+    /// The garment's rest mesh (.obj or .ply), fitted to the body in its rest pose (as
+    /// `weft garment generate` writes it).
+    #[arg(long, value_name = "G.obj")]
+    garment: PathBuf,
+    /// A body model in the SMPL .npz layout; default: weft's default body.
+    #[arg(long, value_name = "FILE.npz")]
+    body: Option<PathBuf>,
+    /// Shape coefficients β of the body, comma-separated (missing ones are 0).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    betas: Vec<f64>,
+    /// The motion: an .npz (AMASS layout) or .bvh file, or a procedural motion name
+    /// (walk, run, jump, dance, kick, raise-arms, twist, bow).
+    #[arg(long, value_name = "FILE|NAME")]
+    motion: String,
+    /// Output directory (created): frames.pc2, frames.npy, stats.json, obj/ with --obj.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Material preset: hood, silk, cotton, jersey, denim or leather.
+    #[arg(long, default_value = "cotton")]
+    material: String,
+    /// Implicit-Euler steps per frame.
+    #[arg(long)]
+    substeps: Option<usize>,
+    /// Simulate at most this many frames (a procedural motion is generated this long;
+    /// default 60).
+    #[arg(long)]
+    frames: Option<usize>,
+    /// Warm-up frames before the first output frame (rest pose → first pose).
+    #[arg(long)]
+    warmup: Option<usize>,
+    /// Seed of a procedural motion.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Frame rate of a procedural motion.
+    #[arg(long, default_value_t = 30.0)]
+    fps: f64,
+    /// Also write an OBJ sequence to DIR/obj/.
+    #[arg(long)]
+    obj: bool,
+}
+
+/// Frames a procedural motion gets when --frames is not given.
+const DEFAULT_PROCEDURAL_FRAMES: usize = 60;
+
+pub fn run(args: &SimulateArgs) -> Result<()> {
+    let material = Material::preset(&args.material)?;
+    let garment = load_mesh(&args.garment)
+        .with_context(|| format!("reading the garment {}", args.garment.display()))?
+        .mesh;
+    let (model, body_name) = match &args.body {
+        Some(path) => (BodyModel::load(path)?, path.display().to_string()),
+        None => (default_body()?, DEFAULT_BODY_NAME.to_string()),
+    };
+    if args.betas.len() > model.num_betas() {
+        bail!(
+            "--betas has {} values; {body_name} has {}",
+            args.betas.len(),
+            model.num_betas()
+        );
+    }
+    let mut betas = args.betas.clone();
+    betas.resize(model.num_betas(), 0.0);
+    let motion = load_motion(args, &model, &betas)?;
+    let mut opts = SequenceOptions {
+        max_frames: args.frames,
+        ..SequenceOptions::default()
+    };
+    if let Some(s) = args.substeps {
+        if s == 0 {
+            bail!("--substeps 0: expected at least 1");
+        }
+        opts.substeps = s;
+    }
+    if let Some(w) = args.warmup {
+        opts.warmup_frames = w;
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating the output directory {}", args.out.display()))?;
+
+    let total = args
+        .frames
+        .map_or(motion.frame_count(), |f| f.min(motion.frame_count()));
+    let bar = ProgressBar::new(total as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} simulate [{bar:30}] {pos}/{len} frames  {per_sec}  ETA {eta}  {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    bar.set_message("warming up");
+    let result = simulate_sequence(
+        &garment,
+        &material,
+        &model,
+        &betas,
+        &motion,
+        &opts,
+        &mut |s: &FrameStats| {
+            bar.set_message(format!(
+                "strain {:.2}% (max {:.1}%)",
+                100.0 * s.mean_edge_strain,
+                100.0 * s.max_edge_strain
+            ));
+            bar.inc(1);
+        },
+    );
+    bar.finish_and_clear();
+    let info = Info {
+        garment: &args.garment,
+        body: &body_name,
+        material: material.name,
+        motion: &args.motion,
+        fps: motion.fps(),
+        substeps: opts.substeps,
+        warmup: opts.warmup_frames,
+    };
+    match result {
+        Ok(seq) => {
+            write_outputs(args, &garment.faces, &seq, &info, None)?;
+            emit(&summary(args, &seq, &info))
+        }
+        Err(SequenceError::Diverged {
+            frame,
+            message,
+            finished,
+        }) => {
+            if !finished.frames.is_empty() {
+                write_outputs(
+                    args,
+                    &garment.faces,
+                    &finished,
+                    &info,
+                    Some((frame, &message)),
+                )?;
+            }
+            bail!(
+                "the simulation diverged at frame {frame}: {message}; {} finished frames written to {}",
+                finished.frames.len(),
+                args.out.display()
+            )
+        }
+        Err(e) => Err(e).with_context(|| format!("simulating {}", args.garment.display())),
+    }
+}
+
+/// What the run was, for stats.json and the summary.
+struct Info<'a> {
+    garment: &'a Path,
+    body: &'a str,
+    material: &'a str,
+    motion: &'a str,
+    fps: f64,
+    substeps: usize,
+    warmup: usize,
+}
+
+fn load_motion(args: &SimulateArgs, model: &BodyModel, betas: &[f64]) -> Result<Motion> {
+    let path = Path::new(&args.motion);
+    let is_file = path.exists()
+        || matches!(
+            path.extension().and_then(|e| e.to_str()),
+            Some("npz" | "bvh" | "NPZ" | "BVH")
+        );
+    if is_file {
+        let joints = model.joints(betas)?;
+        let rest_joints = joints.try_into().map_err(|j: Vec<[f64; 3]>| {
+            anyhow::anyhow!("the body has {} joints; motions drive SMPL's 24", j.len())
+        })?;
+        let options = MotionFileOptions {
+            rest_joints,
+            ..MotionFileOptions::default()
+        };
+        let (motion, _) = read_motion(path, &options)
+            .with_context(|| format!("reading the motion {}", path.display()))?;
+        return Ok(motion);
+    }
+    let Some(kind) = MotionKind::parse(&args.motion) else {
+        bail!(
+            "--motion {:?} is neither a motion file (.npz, .bvh) nor a procedural motion (walk, run, jump, dance, kick, raise-arms, twist, bow)",
+            args.motion
+        );
+    };
+    let params = ProceduralParams {
+        frames: args.frames.unwrap_or(DEFAULT_PROCEDURAL_FRAMES),
+        fps: args.fps,
+        seed: args.seed,
+        ..ProceduralParams::new(kind)
+    };
+    generate(&params).with_context(|| format!("generating {kind}"))
+}
+
+fn totals(seq: &SimulatedSequence) -> serde_json::Value {
+    let after: Vec<&FrameStats> = seq.stats.iter().skip(1).collect();
+    let n = after.len().max(1) as f64;
+    let max = |f: fn(&FrameStats) -> f64| seq.stats.iter().map(f).fold(0.0, f64::max);
+    json!({
+        "frames": seq.stats.len(),
+        "warmup_seconds": seq.stats.first().map_or(0.0, |s| s.seconds),
+        "seconds": seq.stats.iter().map(|s| s.seconds).sum::<f64>(),
+        "mean_seconds_per_frame": after.iter().map(|s| s.seconds).sum::<f64>() / n,
+        "mean_edge_strain": seq.stats.iter().map(|s| s.mean_edge_strain).sum::<f64>()
+            / seq.stats.len().max(1) as f64,
+        "max_edge_strain": max(|s| s.max_edge_strain),
+        "max_penetration": max(|s| s.max_penetration),
+        "frames_with_penetration": seq.stats.iter().filter(|s| s.penetrations > 0).count(),
+        "newton_iterations": seq.stats.iter().map(|s| s.newton_iterations).sum::<usize>(),
+        "cg_iterations": seq.stats.iter().map(|s| s.cg_iterations).sum::<usize>(),
+        "pushed_out_at_start": seq.pushed_out,
+    })
+}
+
+fn write_outputs(
+    args: &SimulateArgs,
+    faces: &[[u32; 3]],
+    seq: &SimulatedSequence,
+    info: &Info<'_>,
+    diverged: Option<(usize, &str)>,
+) -> Result<()> {
+    let frames = Frames::from_frames(&seq.frames)?;
+    let out = &args.out;
+    write_pc2(&out.join("frames.pc2"), &frames, Pc2Timing::default())?;
+    frames
+        .write_npy(&out.join("frames.npy"))
+        .with_context(|| format!("writing {}", out.join("frames.npy").display()))?;
+    if args.obj {
+        write_obj_sequence(&out.join("obj"), faces, &frames)?;
+    }
+    let stats = json!({
+        "garment": info.garment.display().to_string(),
+        "body": info.body,
+        "betas": args.betas,
+        "material": info.material,
+        "motion": info.motion,
+        "fps": info.fps,
+        "substeps": info.substeps,
+        "warmup_frames": info.warmup,
+        "vertices": frames.vertex_count(),
+        "diverged": diverged.map(|(frame, message)| json!({"frame": frame, "message": message})),
+        "totals": totals(seq),
+        "frames": seq.stats,
+    });
+    let text = serde_json::to_string_pretty(&stats)?;
+    let path = out.join("stats.json");
+    write_atomic(&path, |w| w.write_all(text.as_bytes()))
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+fn summary(args: &SimulateArgs, seq: &SimulatedSequence, info: &Info<'_>) -> String {
+    let t = totals(seq);
+    let get = |k: &str| t[k].as_f64().unwrap_or(0.0);
+    format!(
+        "wrote {}: {} frames of {} vertices ({}, {} sub-steps at {} fps); {:.3} s per frame after a {:.1} s warm-up; edge strain mean {:.3}% max {:.2}%; deepest penetration {:.2} mm",
+        args.out.display(),
+        seq.frames.len(),
+        seq.frames.first().map_or(0, Vec::len),
+        info.material,
+        info.substeps,
+        info.fps,
+        get("mean_seconds_per_frame"),
+        get("warmup_seconds"),
+        100.0 * get("mean_edge_strain"),
+        100.0 * get("max_edge_strain"),
+        1e3 * get("max_penetration"),
+    )
+}
