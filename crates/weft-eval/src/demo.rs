@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use weft_data::{
     generate, DataConfig, GarmentSpec, GenerateOptions, MotionSpec as DataMotion, Progress,
-    SequenceSimulator, Split,
+    SequenceSimulator, SimInput, SimOutcome, Split,
 };
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_mesh::export::ExportFormat;
@@ -460,4 +460,38 @@ pub fn run_demo(
         lbs_mm,
         seconds,
     })
+}
+
+/// A cheap, deterministic stand-in for the simulator: the LBS baseline plus a smooth
+/// vertical sag that varies over time, so the ground truth is neither the baseline nor
+/// constant. For tests and dry runs of the pipeline (data → training → evaluation)
+/// where the real simulator would take minutes; its figures mean nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StandInSimulator;
+
+impl SequenceSimulator for StandInSimulator {
+    fn simulate(
+        &self,
+        input: &SimInput<'_>,
+        on_frame: &mut dyn FnMut(),
+    ) -> Result<SimOutcome, String> {
+        let betas: Vec<f32> = input.betas.iter().map(|&b| b as f32).collect();
+        let poses = flat_poses(input.motion);
+        let frames = crate::baseline::LbsBaseline::new(input.garment, input.body, &betas)
+            .and_then(|b| b.animate(input.body, &poses, input.motion.trans()))
+            .map_err(|e| e.to_string())?;
+        let frames = frames
+            .into_iter()
+            .enumerate()
+            .map(|(t, f)| {
+                on_frame();
+                let sag = 0.01 * (1.0 + (0.3 * t as f32).sin());
+                f.into_iter().map(|p| [p[0], p[1] - sag, p[2]]).collect()
+            })
+            .collect();
+        Ok(SimOutcome::Finished {
+            frames,
+            stats: serde_json::Value::Null,
+        })
+    }
 }
