@@ -309,7 +309,7 @@ pub fn run_demo(
     let mut ropts = RenderOptions::new(320, 320);
     ropts.view = View::ThreeQuarter;
     ropts.title = Some(format!(
-        "unseen {} ({} vertices), β = {:?}, motion {}",
+        "unseen {} ({} vertices), shape (betas) {:?}, motion {}",
         kind.name(),
         garment.vertex_count(),
         UNSEEN_BETAS,
