@@ -359,6 +359,7 @@ mod tests {
     use super::*;
     use crate::contact::Sphere;
     use weft_mesh::primitives::grid;
+    use weft_mesh::TriMesh;
 
     /// A 0.5 m square of cotton, pinned at the two corners of one edge, falls from
     /// horizontal and swings down: every Newton iteration decreases the potential, the
@@ -459,6 +460,84 @@ mod tests {
         // The centre rests on top of the sphere.
         let c = sim.positions()[nx * nx / 2];
         assert!((c[1] - body.radius).abs() < 0.01, "{c:?}");
+    }
+
+    /// A strip pinned along its top edge hangs straight down and stretches under its own
+    /// weight to the analytic static rest: with ν = 0 (no lateral contraction) and StVK,
+    /// the first Piola stress per rest width at arc length `s` from the top carries the
+    /// weight below, `(1 + ε) E h ((1 + ε)² − 1)/2 = ρ g (L − s)`, and the bottom edge
+    /// drops by `∫₀ᴸ ε(s) ds` beyond the rest length. Large implicit-Euler steps
+    /// (0.1 s) damp the motion so the state settles on the static equilibrium.
+    #[test]
+    fn hanging_strip_reaches_the_analytic_elongation() {
+        let (w, l, nx, ny) = (0.1, 0.5, 5, 21);
+        let flat = grid(nx, ny, l / (ny - 1) as f64);
+        let rest = TriMesh::new(
+            flat.positions.iter().map(|p| [p[0], -p[2], 0.0]).collect(),
+            flat.faces.clone(),
+        );
+        assert!((rest.positions[nx - 1][0] - w).abs() < 1e-12);
+        let material = Material {
+            name: "test",
+            density: 0.2,
+            young_modulus: 7.0e4,
+            poisson_ratio: 0.0,
+            thickness: 4.7e-4,
+            bending_stiffness: 0.0,
+            friction: 0.0,
+        };
+        let mut sim = ClothSimulator::new(&rest, &material, SimOptions::default()).unwrap();
+        let top: Vec<u32> = (0..nx as u32).collect();
+        sim.pin(&top).unwrap();
+        for _ in 0..80 {
+            let r = sim.step(0.1, None).unwrap();
+            for e in r.newton.energies.windows(2) {
+                assert!(e[1] <= e[0] + 1e-12 * e[0].abs().max(1.0));
+            }
+        }
+        // Analytic: solve for ε(s) by Newton, integrate by the midpoint rule.
+        let (eh, load) = (
+            material.young_modulus * material.thickness,
+            material.density * 9.81,
+        );
+        let strain = |s: f64| {
+            let target = load * (l - s) / eh;
+            let mut e: f64 = target;
+            for _ in 0..50 {
+                let f = (1.0 + e) * ((1.0 + e).powi(2) - 1.0) / 2.0 - target;
+                let df = ((1.0 + e).powi(2) - 1.0) / 2.0 + (1.0 + e).powi(2);
+                e -= f / df;
+            }
+            e
+        };
+        let m = 10_000;
+        let elongation: f64 = (0..m)
+            .map(|k| strain((k as f64 + 0.5) * l / m as f64) * l / m as f64)
+            .sum();
+        let bottom: Vec<f64> = (0..nx)
+            .map(|i| sim.positions()[(ny - 1) * nx + i][1])
+            .collect();
+        if std::env::var_os("WEFT_SIM_TRACE").is_some() {
+            eprintln!("analytic elongation {elongation:.6} m, bottom edge {bottom:?}");
+        }
+        for b in &bottom {
+            let got = -b - l;
+            assert!(
+                (got - elongation).abs() < 0.03 * elongation,
+                "bottom dropped {got:.6} m beyond the rest length, analytic {elongation:.6} m"
+            );
+        }
+        assert!(
+            elongation > 5e-3,
+            "the check must see a real stretch: {elongation}"
+        );
+        // Hangs straight: no sideways or out-of-plane drift.
+        for p in sim.positions() {
+            assert!(
+                p[2].abs() < 1e-6 && p[0] > -1e-3 && p[0] < w + 1e-3,
+                "{p:?}"
+            );
+        }
     }
 
     #[test]
