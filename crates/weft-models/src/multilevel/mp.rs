@@ -20,6 +20,7 @@
 //! (docs/multilevel.md).
 
 use burn::module::{Module, Param};
+use burn::tensor::activation::sigmoid;
 use burn::tensor::Tensor;
 use weft_nn::pool::{
     unpool_by_index, AsapPool, AsapPoolConfig, SagPool, SagPoolConfig, Selection, StructurePool,
@@ -32,6 +33,18 @@ use weft_nn::{
 
 use super::config::{MultilevelConfig, PoolingKind};
 use crate::error::ModelError;
+
+/// `tanh(x) = 2σ(2x) − 1`, the activation of every M^mp GAT block.
+///
+/// Why not `Tensor::tanh`: on flex it calls libm's scalar `tanhf` (through `expm1f`) per
+/// element, measured at about a quarter of the CPU time of the `cpu` preset's inference
+/// (perf, 4 000-vertex skirt, 16 frames). flex's sigmoid is one fused pass over `expf`,
+/// overflow-safe in both directions, with a backward from its output (`σ(1 − σ)`), so
+/// this form is faster, equally stable, and exact to f32 rounding (absolute error about
+/// 1e-7 near zero, from the final subtraction).
+pub fn tanh(x: Tensor<2>) -> Tensor<2> {
+    sigmoid(x * 2.0) * 2.0 - 1.0
+}
 
 /// One M^mp submodule; see the module documentation.
 #[derive(Module, Debug)]
@@ -64,7 +77,7 @@ impl MpSubmodule {
             GatBlockConfig::new(d_input, cfg.mp_channels)
                 .with_heads(cfg.mp_heads)
                 .with_merge(HeadMerge::Concat)
-                .with_activation(Activation::Tanh)
+                .with_activation(Activation::None)
                 .with_negative_slope(cfg.negative_slope)
                 .init(device)
         };
@@ -164,7 +177,7 @@ impl MpSubmodule {
         if let Some(bias) = &self.embed.bias {
             x = x + bias.val().unsqueeze_dim(0);
         }
-        Ok(x.tanh())
+        Ok(tanh(x))
     }
 
     /// Encoder, decoder and output GAT on embedded features `x` (`[T·N, heads·channels]`).
@@ -202,7 +215,7 @@ impl MpSubmodule {
             })?;
             skips.push(x.clone());
             x = StructurePool.forward(x, level)?;
-            x = block.forward(x, level.batch.adjacency())?;
+            x = tanh(block.forward(x, level.batch.adjacency())?);
         }
         for (l, block) in self.up.iter().enumerate() {
             let coarse = levels - l;
@@ -213,7 +226,7 @@ impl MpSubmodule {
                 .pop()
                 .ok_or_else(|| ModelError::Garment("skip connection missing".into()))?;
             x = StructureUnpool::default().forward(x, level)? + skip;
-            x = block.forward(x, batch.batch(coarse - 1).adjacency())?;
+            x = tanh(block.forward(x, batch.batch(coarse - 1).adjacency())?);
         }
         Ok(x)
     }
@@ -223,13 +236,13 @@ impl MpSubmodule {
         let mut x = x;
         for block in &self.down {
             skips.push(x.clone());
-            x = block.forward(x, batch.adjacency())?;
+            x = tanh(block.forward(x, batch.adjacency())?);
         }
         for block in &self.up {
             if let Some(skip) = skips.pop() {
                 x = x + skip;
             }
-            x = block.forward(x, batch.adjacency())?;
+            x = tanh(block.forward(x, batch.adjacency())?);
         }
         Ok(x)
     }
@@ -263,7 +276,7 @@ impl MpSubmodule {
             skips.push(x.clone());
             let current = batches.last().cloned().unwrap_or_else(|| level0.clone());
             let (pooled, selection) = self.pool(l, x, &current)?;
-            x = block.forward(pooled, selection.coarse.adjacency())?;
+            x = tanh(block.forward(pooled, selection.coarse.adjacency())?);
             batches.push(selection.coarse.clone());
             selections.push(selection);
         }
@@ -277,8 +290,29 @@ impl MpSubmodule {
             batches.pop();
             let finer = batches.last().cloned().unwrap_or_else(|| level0.clone());
             x = unpool_by_index(x, &selection)? + skip;
-            x = block.forward(x, finer.adjacency())?;
+            x = tanh(block.forward(x, finer.adjacency())?);
         }
         Ok(x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use burn::tensor::TensorData;
+
+    #[test]
+    fn tanh_matches_burn_in_value_and_gradient() {
+        let device = weft_nn::backend::cpu_autodiff();
+        let values: Vec<f32> = (-400..=400).map(|k| k as f32 * 0.125).collect();
+        let n = values.len();
+        let x = Tensor::<2>::from_data(TensorData::new(values, [n, 1]), &device).require_grad();
+        let ours = tanh(x.clone());
+        let theirs = x.clone().tanh();
+        let (a, b) = (ours.clone().into_data(), theirs.clone().into_data());
+        a.assert_approx_eq::<f32>(&b, burn::tensor::Tolerance::absolute(2e-7));
+        let ga = x.grad(&ours.sum().backward()).unwrap().into_data();
+        let gb = x.grad(&theirs.sum().backward()).unwrap().into_data();
+        ga.assert_approx_eq::<f32>(&gb, burn::tensor::Tolerance::absolute(1e-6));
     }
 }
