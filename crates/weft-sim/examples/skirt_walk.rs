@@ -1,6 +1,9 @@
-//! Times a cone skirt on the default body walking: `cargo run --release -p weft-sim
-//! --example skirt_walk -- AROUND RINGS FRAMES [MATERIAL] [SUBSTEPS]`. Prints one line per
-//! frame and the mean time per frame after the warm-up.
+//! Times a skirt on the default body walking: `cargo run --release -p weft-sim
+//! --example skirt_walk -- AROUND RINGS FRAMES [MATERIAL] [SUBSTEPS]`, a cone skirt of
+//! AROUND × RINGS vertices, or any garment OBJ fitted to the default body with
+//! `WEFT_GARMENT=G.obj` (e.g. from `weft garment generate --kind skirt`); `WEFT_SAVE=DIR`
+//! writes the frames as an OBJ sequence. Prints one line
+//! per frame and the mean time per frame after the warm-up.
 
 use weft_body::motion::{generate, MotionKind, ProceduralParams};
 use weft_sim::sequence::test_skirt;
@@ -13,7 +16,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let material = Material::preset(args.get(3).map_or("cotton", String::as_str))?;
     let body = weft_body::default_body()?;
     let rest = body.shaped(&[])?.vertices;
-    let skirt = test_skirt(&rest, around, rings);
+    let skirt = match std::env::var_os("WEFT_GARMENT") {
+        Some(path) => weft_mesh::io::load_mesh(std::path::Path::new(&path))?.mesh,
+        None => test_skirt(&rest, around, rings),
+    };
     let mut p = ProceduralParams::new(MotionKind::Walk);
     p.frames = frames;
     let motion = generate(&p)?;
@@ -26,6 +32,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .and_then(|s| s.parse().ok())
     {
         opts.sim.newton.max_iterations = n;
+    }
+    if std::env::var("WEFT_HESSIAN").as_deref() == Ok("projected") {
+        opts.sim.newton.hessian = weft_sim::HessianKind::Projected;
     }
     if let Some(r) = std::env::var("WEFT_CG_LOOSE")
         .ok()
@@ -45,6 +54,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             s.mean_edge_strain, s.penetrations, s.max_penetration
         )
     })?;
+    if let Some(dir) = std::env::var_os("WEFT_SAVE") {
+        // The frames as an OBJ sequence, for `weft render`.
+        let frames = weft_mesh::export::Frames::from_frames(&seq.frames)?;
+        let dir = std::path::Path::new(&dir);
+        std::fs::create_dir_all(dir)?;
+        weft_mesh::export::write_obj_sequence(&dir.join("garment"), &skirt.faces, &frames)?;
+        // The body at the last frame.
+        let last = motion.frame_count() - 1;
+        let pose: Vec<[f64; 3]> = motion.poses()[last]
+            .iter()
+            .map(|w| w.map(f64::from))
+            .collect();
+        let shaped = body.shaped(&[])?;
+        let t = motion.trans()[last].map(f64::from);
+        let v = body.pose_vertices(&shaped, &pose, t, weft_body::Skinning::Lbs)?;
+        weft_mesh::io::write_obj(&dir.join("body_last.obj"), &body.mesh(v))?;
+    }
     let after: Vec<f64> = seq.stats.iter().skip(1).map(|s| s.seconds).collect();
     println!(
         "warm-up {:.2} s; mean {:.4} s per frame over {} frames",
