@@ -195,16 +195,20 @@ impl<'a> Evaluator<'a> {
     /// Animates `seq` with the model and the baseline and scores both against its
     /// simulated frames; times inference on the first sequence. Returns the mean vertex
     /// errors (mm) of the model and of the baseline on this sequence.
-    pub fn add(&mut self, seq: Sequence) -> Result<(f64, f64), EvalError> {
+    pub fn add(&mut self, mut seq: Sequence) -> Result<(f64, f64), EvalError> {
         let body = self.body;
-        let betas = &seq.record.betas;
-        if seq.positions.len() != seq.poses.len() {
+        if seq.positions.is_empty() || seq.positions.len() > seq.poses.len() {
             return Err(EvalError::Count {
                 what: "simulated frames vs motion frames",
                 expected: seq.poses.len(),
                 found: seq.positions.len(),
             });
         }
+        // A diverged sequence keeps the frames before the divergence: score those (the
+        // model never looks ahead, so the cut motion gives the same predictions).
+        seq.poses.truncate(seq.positions.len());
+        seq.trans.truncate(seq.positions.len());
+        let betas = &seq.record.betas;
         let predicted = self
             .predictor
             .animate(

@@ -126,12 +126,25 @@ fn scores_a_known_truth_and_writes_the_report() {
     let (model_mm, lbs_mm) = ev.add(seq).unwrap();
     assert!((lbs_mm - 10.0).abs() < 0.01, "{lbs_mm}");
     assert!(model_mm.is_finite());
+    // A diverged sequence: the frames before the divergence are scored.
+    let mut cut = weft_data::Sequence {
+        record: record(&c, frames),
+        garment: c.garment.clone(),
+        corner_uvs: vec![],
+        poses: c.poses.clone(),
+        trans: c.trans.clone(),
+        positions: lbs[..2].to_vec(),
+    };
+    ev.add(cut.clone()).unwrap();
+    cut.positions.clear();
+    assert!(ev.add(cut).is_err());
     let eval = ev.finish("RUN", "DATA");
     let r = &eval.report;
-    assert_eq!((r.sequences, r.frames), (1, frames as u64));
+    assert_eq!((r.sequences, r.frames), (2, frames as u64 + 2));
     let base = r.method(LBS_NAME).unwrap();
-    assert!((base.overall.e_verts_mm.mean - 10.0).abs() < 0.01);
-    assert!(base.overall.e_verts_mm.std < 0.01);
+    // 6 frames at 10 mm and 2 exact frames.
+    let want = 10.0 * frames as f64 / (frames + 2) as f64;
+    assert!((base.overall.e_verts_mm.mean - want).abs() < 0.01);
     assert!(base.overall.e_norm_deg.mean < 0.01);
     assert!(base.per_kind.contains_key("skirt"));
     assert!(base.overall.collision_rate.is_some());
