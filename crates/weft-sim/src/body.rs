@@ -48,6 +48,9 @@ pub struct Penetration {
 }
 
 impl PosedBody {
+    /// Contacts are reported within the query radius, and for every point inside the
+    /// body however deep.
+    ///
     /// The body mesh `positions`/`faces` (closed, outward-oriented for signs to hold;
     /// weft's default body and SMPL are).
     pub fn new(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<Self, SimError> {
@@ -131,10 +134,23 @@ impl PosedBody {
         if !is_finite(x) {
             return None;
         }
-        let c = self
+        // Within the radius, or anywhere inside: a vertex pushed deeper than the radius
+        // (squeezed between an arm and the torso, say) must still be pushed back out
+        // rather than left to fall through the body.
+        let c = match self
             .surface
             .closest_point_within(x, self.query_radius)
-            .ok()??;
+            .ok()?
+        {
+            Some(c) => c,
+            None => {
+                let c = self.surface.closest_point(x).ok()?;
+                if c.signed_distance >= 0.0 {
+                    return None;
+                }
+                c
+            }
+        };
         let normal = if c.distance > ON_SURFACE {
             let s = if c.signed_distance < 0.0 { -1.0 } else { 1.0 };
             scale(sub(x, c.point), s / c.distance)
@@ -234,7 +250,12 @@ mod tests {
         let y = [0.0, 0.95, 0.0];
         let c = body.closest(y).unwrap();
         assert!(c.signed_distance(y) < 0.0 && c.normal[1] > 0.99, "{c:?}");
-        // Far: no contact.
+        // Deep inside, beyond the radius: still a contact, pointing out.
+        let deep = [0.0, 0.5, 0.0];
+        let c = body.closest(deep).unwrap();
+        assert!((c.signed_distance(deep) + 0.5).abs() < 0.01, "{c:?}");
+        assert!(c.normal[1] > 0.99, "{c:?}");
+        // Far outside: no contact.
         assert!(body.closest([0.0, 2.0, 0.0]).is_none());
         assert!(body.closest([f64::NAN, 0.0, 0.0]).is_none());
         // Translate the body: the contact reports the surface displacement.

@@ -1,0 +1,185 @@
+//! End-to-end tests of `weft simulate` through the real binary: a small skirt on the
+//! default body, walking, a few frames (kept small so the test profile runs it in
+//! seconds).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn weft(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_weft"))
+        .args(args)
+        .output()
+        .expect("the weft binary runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A fresh, empty scratch directory under the target dir, unique per test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("simulate-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+/// A 300-vertex skirt fitted to the default body.
+fn skirt(dir: &Path) -> PathBuf {
+    let g = dir.join("skirt.obj");
+    let o = weft(&[
+        "garment",
+        "generate",
+        "--kind",
+        "skirt",
+        "--vertices",
+        "300",
+        "--seed",
+        "1",
+        "--out",
+        s(&g),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    g
+}
+
+fn vertex_count(obj: &Path) -> usize {
+    std::fs::read_to_string(obj)
+        .expect("obj")
+        .lines()
+        .filter(|l| l.starts_with("v "))
+        .count()
+}
+
+#[test]
+fn simulate_writes_frames_npy_pc2_obj_and_stats() {
+    let dir = scratch("walk");
+    let g = skirt(&dir);
+    let n = vertex_count(&g);
+    let out = dir.join("out");
+    let o = weft(&[
+        "simulate",
+        "--garment",
+        s(&g),
+        "--motion",
+        "walk",
+        "--frames",
+        "3",
+        "--warmup",
+        "2",
+        "--substeps",
+        "2",
+        "--material",
+        "silk",
+        "--out",
+        s(&out),
+        "--obj",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("3 frames of"), "{}", stdout(&o));
+    // PC2: 32-byte header, then frames × vertices × 3 f32.
+    let pc2 = std::fs::metadata(out.join("frames.pc2"))
+        .expect("pc2")
+        .len();
+    assert_eq!(pc2, 32 + 3 * n as u64 * 12);
+    // .npy of shape (3, n, 3), little-endian f32.
+    let npy = std::fs::read(out.join("frames.npy")).expect("npy");
+    let head = String::from_utf8_lossy(&npy[..128.min(npy.len())]).into_owned();
+    assert!(head.contains("'<f4'"), "{head}");
+    assert!(head.contains(&format!("(3, {n}, 3)")), "{head}");
+    // One OBJ per frame.
+    let objs = std::fs::read_dir(out.join("obj")).expect("obj dir").count();
+    assert_eq!(objs, 3);
+    // stats.json: per-frame statistics and totals.
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("stats.json")).expect("stats"))
+            .expect("json");
+    let frames = stats["frames"].as_array().expect("frames");
+    assert_eq!(frames.len(), 3);
+    for (k, f) in frames.iter().enumerate() {
+        assert_eq!(f["frame"].as_u64(), Some(k as u64));
+        for key in [
+            "energy",
+            "max_edge_strain",
+            "mean_edge_strain",
+            "max_penetration",
+            "seconds",
+        ] {
+            assert!(f[key].as_f64().is_some_and(f64::is_finite), "{key}: {f}");
+        }
+        assert!(f["newton_iterations"].as_u64().unwrap_or(0) > 0);
+        // Within the collision threshold (2 mm) of the body surface.
+        assert!(f["max_penetration"].as_f64().unwrap_or(1.0) <= 2e-3, "{f}");
+    }
+    assert_eq!(stats["material"], "silk");
+    assert!(stats["diverged"].is_null());
+    assert_eq!(stats["totals"]["frames"].as_u64(), Some(3));
+}
+
+#[test]
+fn bad_input_is_one_clear_error() {
+    let dir = scratch("bad");
+    let g = skirt(&dir);
+    let out = dir.join("out");
+    let run = |extra: &[&str]| {
+        let mut a = vec!["simulate", "--garment", s(&g), "--out", s(&out)];
+        a.extend_from_slice(extra);
+        weft(&a)
+    };
+    let o = run(&["--motion", "moonwalk"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("moonwalk"), "{}", stderr(&o));
+    let o = run(&["--motion", "walk", "--material", "tinfoil"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("tinfoil"), "{}", stderr(&o));
+    let o = run(&["--motion", "walk", "--substeps", "0"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--substeps"), "{}", stderr(&o));
+    let o = run(&["--motion", "missing.npz"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("missing.npz"), "{}", stderr(&o));
+
+    // The skirt shrunk towards the body's axis starts deep inside the hips: refused,
+    // with the count and the depth.
+    let text = std::fs::read_to_string(&g).expect("obj");
+    let shrunk: String = text
+        .lines()
+        .map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            if f.first() == Some(&"v") && f.len() >= 4 {
+                let c: Vec<f64> = f[1..4].iter().map(|x| x.parse().expect("float")).collect();
+                format!("v {} {} {}\n", 0.5 * c[0], c[1], 0.5 * c[2])
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let inside = dir.join("inside.obj");
+    std::fs::write(&inside, shrunk).expect("write");
+    let o = weft(&[
+        "simulate",
+        "--garment",
+        s(&inside),
+        "--motion",
+        "walk",
+        "--frames",
+        "2",
+        "--out",
+        s(&out),
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("starts inside the body") && e.contains("vertices inside"),
+        "{e}"
+    );
+    assert_eq!(e.lines().count(), 1, "{e}");
+}
