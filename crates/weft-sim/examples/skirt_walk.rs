@@ -33,6 +33,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     {
         opts.sim.newton.max_iterations = n;
     }
+    if let Some(w) = std::env::var("WEFT_WARMUP")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        opts.warmup_frames = w;
+    }
     if std::env::var("WEFT_HESSIAN").as_deref() == Ok("projected") {
         opts.sim.newton.hessian = weft_sim::HessianKind::Projected;
     }
