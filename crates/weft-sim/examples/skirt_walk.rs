@@ -2,7 +2,8 @@
 //! --example skirt_walk -- AROUND RINGS FRAMES [MATERIAL] [SUBSTEPS]`, a cone skirt of
 //! AROUND × RINGS vertices, or any garment OBJ fitted to the default body with
 //! `WEFT_GARMENT=G.obj` (e.g. from `weft garment generate --kind skirt`); `WEFT_SAVE=DIR`
-//! writes the frames as an OBJ sequence. Prints one line
+//! writes the frames as an OBJ sequence; `WEFT_MOTION=run|jump|kick|…` picks another
+//! procedural motion. Prints one line
 //! per frame and the mean time per frame after the warm-up.
 
 use weft_body::motion::{generate, MotionKind, ProceduralParams};
@@ -20,7 +21,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(path) => weft_mesh::io::load_mesh(std::path::Path::new(&path))?.mesh,
         None => test_skirt(&rest, around, rings),
     };
-    let mut p = ProceduralParams::new(MotionKind::Walk);
+    let kind = std::env::var("WEFT_MOTION")
+        .ok()
+        .and_then(|m| MotionKind::parse(&m))
+        .unwrap_or(MotionKind::Walk);
+    let mut p = ProceduralParams::new(kind);
     p.frames = frames;
     let motion = generate(&p)?;
     let mut opts = SequenceOptions {
