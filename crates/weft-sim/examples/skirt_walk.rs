@@ -14,7 +14,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let num = |i: usize, d: usize| args.get(i).and_then(|s| s.parse().ok()).unwrap_or(d);
     let (around, rings, frames) = (num(0, 96), num(1, 40), num(2, 30));
-    let material = Material::preset(args.get(3).map_or("cotton", String::as_str))?;
+    let mut material = Material::preset(args.get(3).map_or("cotton", String::as_str))?;
+    if let Some(mu) = std::env::var("WEFT_FRICTION")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
+        material.friction = mu;
+    }
     let body = weft_body::default_body()?;
     let rest = body.shaped(&[])?.vertices;
     let skirt = match std::env::var_os("WEFT_GARMENT") {
