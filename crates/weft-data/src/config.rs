@@ -131,7 +131,7 @@ impl Default for DataConfig {
             seed: 0,
             fps: 30.0,
             frames: 40,
-            substeps: 1,
+            substeps: 2,
             warmup_frames: 10,
             material: "silk".into(),
             body: None,
@@ -190,7 +190,7 @@ impl DataConfig {
             train: SplitConfig {
                 betas: vec![vec![0.0, 0.0], vec![1.5, -0.5], vec![-1.0, 1.0]],
                 random_bodies: 0,
-                motions_per_pair: 1,
+                motions_per_pair: 2,
                 garments: vec![
                     garment("skirt", 600, 1),
                     garment("dress", 800, 2),
