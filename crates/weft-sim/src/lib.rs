@@ -20,6 +20,7 @@
 //! Physics is `f64`, metres, seconds, kilograms, Y up. Derivations, equation numbers and
 //! material sources: `docs/physics.md`.
 
+pub mod attachment;
 pub mod bending;
 pub mod body;
 pub mod collision;
@@ -42,6 +43,7 @@ pub mod stretch;
 #[cfg(test)]
 mod fd_tests;
 
+pub use attachment::{Attachment, SkinAnchors};
 pub use bending::{Bending, BendingScale, RestAngle};
 pub use body::{Penetration, PosedBody};
 pub use collision::CubicCollision;

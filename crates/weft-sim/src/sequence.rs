@@ -19,6 +19,7 @@ use weft_body::{BodyError, BodyModel, ShapedBody, Skinning};
 use weft_mesh::vec3::{add_scaled, dist};
 use weft_mesh::TriMesh;
 
+use crate::attachment::{Attachment, SkinAnchors};
 use crate::body::{Penetration, PosedBody};
 use crate::energy::Energy;
 use crate::error::SimError;
@@ -44,6 +45,9 @@ pub struct SequenceOptions {
     pub max_initial_penetration: f64,
     /// Use at most this many motion frames (`None`: all).
     pub max_frames: Option<usize>,
+    /// Garment vertices that follow the body's skin (default: the top opening, i.e.
+    /// the waistband or neckline; see [`crate::attachment`]).
+    pub attachment: Attachment,
 }
 
 /// Newton iterations per sub-step in a sequence: a fixed budget (the energy still
@@ -63,6 +67,7 @@ impl Default for SequenceOptions {
             skinning: Skinning::Lbs,
             max_initial_penetration: 0.02,
             max_frames: None,
+            attachment: Attachment::TopOpening,
         }
     }
 }
@@ -320,6 +325,12 @@ pub fn simulate_sequence(
     let mut sim = ClothSimulator::new(garment, material, opts.sim)?;
     let zero = vec![[0.0; 3]; start.positions.len()];
     sim.set_state(start.positions.clone(), zero)?;
+    let anchors = SkinAnchors::new(
+        posed.surface(),
+        &start.positions,
+        &opts.attachment.vertices(garment),
+    )?;
+    sim.pin(anchors.vertices())?;
     let strain = EdgeStrain::new(garment);
 
     let mut out = SimulatedSequence {
@@ -358,6 +369,13 @@ pub fn simulate_sequence(
                 &mut body_now,
             );
             posed.refit(&body_now)?;
+            for (&v, t) in anchors
+                .vertices()
+                .iter()
+                .zip(anchors.targets(&body_now, body.faces()))
+            {
+                sim.move_pin(v, t)?;
+            }
             match sim.step(dt, Some(&posed)) {
                 Ok(r) => {
                     frame_stats.newton_iterations += r.newton.iterations;
