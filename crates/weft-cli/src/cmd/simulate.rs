@@ -15,7 +15,8 @@ use weft_body::{default_body, BodyModel};
 use weft_mesh::export::{write_obj_sequence, write_pc2, Frames, Pc2Timing};
 use weft_mesh::io::{load_mesh, write_atomic};
 use weft_sim::{
-    simulate_sequence, FrameStats, Material, SequenceError, SequenceOptions, SimulatedSequence,
+    simulate_sequence, Attachment, FrameStats, Material, SequenceError, SequenceOptions,
+    SimulatedSequence,
 };
 
 use super::emit;
@@ -61,6 +62,17 @@ pub struct SimulateArgs {
     /// Also write an OBJ sequence to DIR/obj/.
     #[arg(long)]
     obj: bool,
+    /// Garment vertices that follow the body's skin: `top` (the highest opening — a
+    /// waistband or neckline — as a sewn-in elastic would hold it) or `none` (contact
+    /// and friction only; loose templates may slide down).
+    #[arg(long, value_enum, default_value_t = AttachArg::Top)]
+    attach: AttachArg,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum AttachArg {
+    Top,
+    None,
 }
 
 /// Frames a procedural motion gets when --frames is not given.
@@ -87,6 +99,10 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let motion = load_motion(args, &model, &betas)?;
     let mut opts = SequenceOptions {
         max_frames: args.frames,
+        attachment: match args.attach {
+            AttachArg::Top => Attachment::TopOpening,
+            AttachArg::None => Attachment::None,
+        },
         ..SequenceOptions::default()
     };
     if let Some(s) = args.substeps {
