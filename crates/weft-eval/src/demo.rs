@@ -89,6 +89,7 @@ pub fn quick_data_config() -> DataConfig {
         frames: None,
     };
     c.train.betas = vec![vec![0.0, 0.0]];
+    c.train.motions_per_pair = 1;
     c.train.garments = vec![g(320, 1)];
     c.train.motions = vec![m("walk", 1)];
     c.validation.garments = vec![g(300, 2)];
