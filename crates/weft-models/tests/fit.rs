@@ -22,6 +22,9 @@ use weft_garment::GarmentKind;
 use weft_models::multilevel::{FrameInputs, GarmentInput, MultilevelConfig};
 use weft_nn::{cosine_annealing, AdamaxConfig};
 
+/// One frame of garment positions.
+type Positions = Vec<[f64; 3]>;
+
 #[test]
 #[ignore]
 fn training_beats_the_lbs_baseline_on_unseen_frames() {
@@ -52,8 +55,8 @@ fn training_beats_the_lbs_baseline_on_unseen_frames() {
         .positions
         .iter()
         .fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p[1]), b.max(p[1])));
-    // Per frame: the target positions and the baseline's.
-    let frames: Vec<(Vec<[f64; 3]>, Vec<[f64; 3]>)> = (0..c.poses.len())
+    // Per frame: (target, baseline) positions.
+    let frames: Vec<(Positions, Positions)> = (0..c.poses.len())
         .map(|t| {
             let pose: Vec<[f64; 3]> = (0..24)
                 .map(|j| std::array::from_fn(|a| f64::from(c.poses[t][3 * j + a])))
