@@ -44,7 +44,7 @@ impl Default for TrainConfig {
     fn default() -> Self {
         TrainConfig {
             seed: 0,
-            steps: 1500,
+            steps: 3000,
             learning_rate: 3e-3,
             min_learning_rate: 3e-5,
             window: 8,
