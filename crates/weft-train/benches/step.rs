@@ -2,12 +2,14 @@
 //! terms (vertex, edge, normal), backward and the Adamax update, at batch 1 (one frame)
 //! and for a window of 8 frames, on a 4 000-vertex skirt on weft's default body, for the
 //! `cpu` and `paper` presets. Also the step-2 terms (collision against the posed body,
-//! gravity) on the `cpu` preset. Figures in docs/benchmarks.md ("Training").
+//! gravity) on the `cpu` preset, and the `paper` step of schedule step 2 (only the second
+//! M^mp submodule trains). Figures in docs/benchmarks.md ("Training").
 //!
 //! `cargo bench -p weft-train --bench step`
 
 use std::time::Duration;
 
+use burn::module::Module;
 use burn::optim::GradientsParams;
 use criterion::{criterion_group, criterion_main, Criterion};
 use weft_body::motion::{generate, MotionKind, ProceduralParams};
@@ -17,7 +19,7 @@ use weft_nn::backend::{cpu_autodiff, retain_freed_memory, seeded};
 use weft_nn::AdamaxConfig;
 use weft_train::loss::Term;
 use weft_train::multilevel::carried_sequence;
-use weft_train::{MultilevelTask, TrainConfig, TrainTask};
+use weft_train::{MultilevelTask, Phase, TrainConfig, TrainTask};
 
 const VERTICES: usize = 4000;
 
@@ -91,6 +93,23 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    // Step 2 of the schedule: only the second M^mp submodule trains (the rest is
+    // frozen and the pair encoding cached), the comparable case to a step of M^mp alone.
+    let cfg = MultilevelConfig::paper();
+    let mut t = task(&cfg, 1);
+    let model = Multilevel::new(&cfg, &seeded(&cpu_autodiff(), 0)).expect("model");
+    let group_ids = t.physics_group(&model);
+    let mut model = model.no_grad().set_require_grad_group(group_ids, true);
+    t.on_phase(Phase::Physics);
+    let mut optim = AdamaxConfig::new().init();
+    group.bench_function("paper/frames=1/supervised/second-submodule-only", |b| {
+        b.iter(|| {
+            let losses = t.losses(&model, 0, &supervised).expect("losses");
+            let total = losses.into_iter().reduce(|a, b| a + b).expect("terms");
+            let grads = GradientsParams::from_grads(total.backward(), &model);
+            model = optim.step(1e-4, model.clone(), grads);
+        })
+    });
     group.finish();
 }
 
