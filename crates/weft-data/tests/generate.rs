@@ -404,3 +404,48 @@ fn the_real_simulator_generates_a_small_dataset() {
             .all(|x| x.is_finite()));
     }
 }
+
+#[test]
+fn file_motions_are_resampled_and_windowed() {
+    use weft_body::motion::{generate as procedural, write_motion, MotionFileOptions};
+    use weft_body::motion::{MotionKind, ProceduralParams};
+    let dir = scratch("file-motion");
+    // A 60 fps walk of 20 frames written as AMASS .npz; the dataset runs at 30 fps.
+    let mut params = ProceduralParams::new(MotionKind::Walk);
+    params.frames = 20;
+    params.fps = 60.0;
+    let walk = procedural(&params).unwrap();
+    let file = dir.join("capture.npz");
+    write_motion(&file, &walk, &MotionFileOptions::default()).unwrap();
+    let mut c = small_config();
+    c.test.motions = vec![MotionSpec {
+        file: Some(file.clone()),
+        start: 2,
+        frames: Some(4),
+        ..MotionSpec::default()
+    }];
+    let out = dir.join("out");
+    run(&c, &out, &FakeSim::new(), None);
+    let ds = Dataset::open(&out).unwrap();
+    let r = ds.records_in(Split::Test)[0].clone();
+    assert_eq!(r.motion_id, "m003-capture");
+    assert_eq!((r.frame_range, r.frames), ([2, 6], 4));
+    assert_eq!(ds.load(&r).unwrap().poses.len(), 4);
+    // A window past the end of the file fails that sequence, naming the frames.
+    c.test.motions[0].frames = Some(40);
+    let out = dir.join("out2");
+    let report = generate(
+        &c,
+        &out,
+        &GenerateOptions::default(),
+        &FakeSim::new(),
+        &Silent,
+    )
+    .unwrap();
+    assert_eq!(report.failed.len(), 1);
+    assert!(
+        report.failed[0].1.contains("frames 2..42"),
+        "{:?}",
+        report.failed
+    );
+}
