@@ -121,6 +121,11 @@ pub struct MultilevelConfig {
     /// skinning-weight logits, so the untrained model skins like the LBS baseline.
     #[config(default = true)]
     pub weight_prior: bool,
+    /// Take that prior from the transfer diffused over the garment
+    /// (weft_body::features::diffusion): loose cloth — a skirt's hem between the legs —
+    /// starts as a blend of the nearby bones instead of following the nearest thigh.
+    #[config(default = true)]
+    pub weight_diffusion: bool,
     /// Initial gain of the learned skinning-weight logits (small: start near the prior).
     #[config(default = 0.01)]
     pub weight_gain: f64,

@@ -19,7 +19,9 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use weft_body::features::{joint_distances, transfer_weights};
+use weft_body::features::{
+    joint_distances, transfer_weights, transfer_weights_diffused, DiffusionParams,
+};
 use weft_body::BodyModel;
 use weft_hierarchy::Hierarchy;
 use weft_mesh::nystrom::NystromSpectrum;
@@ -197,8 +199,17 @@ impl GarmentInput {
         let body_weights = body
             .skinning_weights()
             .map_err(|e| ModelError::Body(format!("body skinning weights: {e}")))?;
-        let transfer = transfer_weights(&surface, &body_weights, &garment.positions)
-            .map_err(|e| ModelError::Body(format!("weight transfer: {e}")))?;
+        let transfer = if cfg.weight_diffusion {
+            transfer_weights_diffused(
+                &surface,
+                &body_weights,
+                garment,
+                &DiffusionParams::default(),
+            )
+        } else {
+            transfer_weights(&surface, &body_weights, &garment.positions)
+        }
+        .map_err(|e| ModelError::Body(format!("weight transfer: {e}")))?;
         let transfer_weights = transfer.weights.to_f32();
 
         // Hierarchy for structure-preserving pooling.
