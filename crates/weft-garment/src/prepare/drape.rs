@@ -35,7 +35,7 @@
 
 use std::time::Instant;
 
-use weft_mesh::{Topology, TriMesh};
+use weft_mesh::TriMesh;
 use weft_sim::{ClothSimulator, Material, Penetration, PosedBody, SimOptions};
 
 use super::resize::check_finite;
@@ -194,7 +194,7 @@ pub fn drape(
     let mut x = start.positions;
     let mut v = vec![[0.0; 3]; x.len()];
     let pins = if options.pin_top_opening {
-        top_opening(garment)
+        weft_sim::attachment::top_opening(garment)
     } else {
         Vec::new()
     };
@@ -246,18 +246,3 @@ pub fn drape(
     })
 }
 
-/// The vertices of the boundary loop with the highest mean height (empty for a closed
-/// garment).
-fn top_opening(garment: &TriMesh) -> Vec<u32> {
-    let mean_y = |l: &[u32]| {
-        l.iter()
-            .map(|&v| garment.positions[v as usize][1])
-            .sum::<f64>()
-            / l.len().max(1) as f64
-    };
-    Topology::new(garment)
-        .boundary_loops()
-        .into_iter()
-        .max_by(|a, b| mean_y(a).total_cmp(&mean_y(b)))
-        .unwrap_or_default()
-}
