@@ -245,4 +245,3 @@ pub fn drape(
         seconds: clock.elapsed().as_secs_f64(),
     })
 }
-
