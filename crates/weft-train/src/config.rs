@@ -54,7 +54,7 @@ impl Default for TrainConfig {
             validation_windows: 12,
             max_non_finite: 20,
             grad_clip_norm: None,
-            weights: TermWeights::default(),
+            weights: TermWeights::cpu(),
             schedule: ScheduleConfig::default(),
         }
     }
@@ -65,8 +65,9 @@ pub const PRESETS: [&str; 2] = ["cpu", "paper"];
 
 impl TrainConfig {
     /// The training side of a preset: `cpu` (the default above: short windows, one per
-    /// step, sized to train the tiny dataset in minutes on two cores) or `paper` (batch
-    /// 64 frames as 4 windows of 16, seed 000 supp. §4, and a longer run).
+    /// step, sized to train the tiny dataset in minutes on two cores, [`TermWeights::cpu`])
+    /// or `paper` (batch 64 frames as 4 windows of 16, seed 000 supp. §4, the printed loss
+    /// weights, and a longer run).
     pub fn preset(name: &str) -> Result<Self> {
         match name {
             "cpu" => Ok(TrainConfig::default()),
@@ -77,6 +78,7 @@ impl TrainConfig {
                 checkpoint_every: 1000,
                 validate_every: 1000,
                 validation_windows: 64,
+                weights: TermWeights::default(),
                 ..TrainConfig::default()
             }),
             other => Err(TrainError::config(
