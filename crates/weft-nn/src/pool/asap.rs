@@ -192,25 +192,40 @@ impl AsapPool {
     }
 }
 
-/// The pattern of `Sᵀ (A + I) S` on the kept cluster centers.
+/// The pattern of `Sᵀ (A + I) S` on the kept cluster centers: each center joined to the
+/// kept centers within three hops. A breadth-first search per center with a visit stamp
+/// reaches each vertex once; enumerating the three-hop *paths* instead grows with the
+/// cube of the degree, which on the second ASAP level (already three-hop dense) cost
+/// seconds per forward pass.
 fn cluster_graph(batch: &GraphBatch, kept: &[u32]) -> GraphBatch {
     let fine = batch.graph();
     let mut coarse_index = vec![u32::MAX; fine.vertex_count()];
     for (c, &v) in kept.iter().enumerate() {
         coarse_index[v as usize] = c as u32;
     }
-    let closed = |v: usize| std::iter::once(v as u32).chain(fine.neighbors(v).iter().copied());
+    let mut stamp = vec![u32::MAX; fine.vertex_count()];
+    let (mut frontier, mut next) = (Vec::new(), Vec::new());
     let mut edges = Vec::new();
     for (c, &center) in kept.iter().enumerate() {
-        for j in closed(center as usize) {
-            for l in closed(j as usize) {
-                for other in closed(l as usize) {
-                    let co = coarse_index[other as usize];
-                    if co != u32::MAX && (c as u32) < co {
-                        edges.push([c as u32, co]);
+        let c = c as u32;
+        stamp[center as usize] = c;
+        frontier.clear();
+        frontier.push(center);
+        for _hop in 0..3 {
+            next.clear();
+            for &v in &frontier {
+                for &u in fine.neighbors(v as usize) {
+                    if stamp[u as usize] != c {
+                        stamp[u as usize] = c;
+                        next.push(u);
+                        let co = coarse_index[u as usize];
+                        if co != u32::MAX && c < co {
+                            edges.push([c, co]);
+                        }
                     }
                 }
             }
+            std::mem::swap(&mut frontier, &mut next);
         }
     }
     batch_on(batch, kept, &edges)
