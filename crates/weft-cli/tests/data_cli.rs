@@ -4,40 +4,14 @@
 //! made with weft-data's library and a cheap stand-in simulator; the one test that runs
 //! `weft data generate` with the real simulator is ignored (run it with `--ignored`).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
 use weft_data::manifest::Job;
 use weft_data::{
     generate, DataConfig, GarmentSpec, GenerateOptions, MotionSpec, SequenceSimulator, Silent,
     SimInput, SimOutcome,
 };
 
-fn weft(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_weft"))
-        .args(args)
-        .output()
-        .expect("the weft binary runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("data-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
+mod common;
+use common::{s, scratch, stderr, stdout, weft};
 
 /// The rest garment moved with the root, one frame per motion frame; diverges at frame 1
 /// on bodies with β₀ = 1.

@@ -4,14 +4,9 @@
 //! `weft demo --quick` end to end.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn weft(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_weft"))
-        .args(args)
-        .output()
-        .expect("the weft binary runs")
-}
+mod common;
+use common::weft;
 
 #[test]
 fn help_names_the_default_directory() {

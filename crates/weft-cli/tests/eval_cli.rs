@@ -4,30 +4,13 @@
 //! stderr and a non-zero exit.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 use std::sync::OnceLock;
 
 use weft_data::Silent;
 use weft_eval::demo::{run_demo, DemoOptions, StandInSimulator};
 
-fn weft(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_weft"))
-        .args(args)
-        .output()
-        .expect("the weft binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
+mod common;
+use common::{s, stderr, stdout, weft};
 
 /// The micro demo's directory (data/, run/, animation/), made once per test process.
 fn demo() -> &'static Path {

@@ -2,7 +2,7 @@
 //! and bad input gives one line on stderr, a non-zero exit and no output file.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use weft_mesh::export::gltf::read_glb;
 use weft_mesh::export::mdd::read_mdd;
@@ -13,23 +13,8 @@ use weft_mesh::export::Frames;
 use weft_mesh::io::write_obj;
 use weft_mesh::primitives::{cylinder, grid};
 
-fn weft(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_weft"))
-        .args(args)
-        .output()
-        .expect("the weft binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("export_cli_{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
+mod common;
+use common::{s, scratch, stderr, weft};
 
 fn entries(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -57,10 +42,6 @@ fn setup(dir: &Path) -> (PathBuf, PathBuf, Frames) {
     let npy = dir.join("frames.npy");
     frames.write_npy(&npy).unwrap();
     (template, npy, frames)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 /// One line on stderr starting `error:`, exit status 1, and the line contains `needle`.

@@ -3,14 +3,9 @@
 //! consistent, bad input one line of error.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn weft(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_weft"))
-        .args(args)
-        .output()
-        .expect("run weft")
-}
+mod common;
+use common::weft;
 
 fn ok(args: &[&str]) -> String {
     let out = weft(args);

@@ -1,33 +1,12 @@
 //! End-to-end tests of `weft render` through the real binary.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use weft_mesh::io::write_obj;
 use weft_mesh::primitives::cylinder;
 
-fn weft(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_weft"))
-        .args(args)
-        .output()
-        .expect("the weft binary runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A fresh, empty scratch directory under the target dir, unique per test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
+mod common;
+use common::{s, scratch, stderr, stdout, weft};
 
 /// A 1-D little-endian float32 `.npy` file.
 fn write_npy_f32(path: &Path, values: &[f32]) {
@@ -65,10 +44,6 @@ fn png_size(path: &Path) -> (u32, u32) {
     let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
     let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
     (w, h)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
 }
 
 #[test]
