@@ -55,7 +55,7 @@ impl Default for TrainConfig {
             max_non_finite: 20,
             grad_clip_norm: None,
             weights: TermWeights::cpu(),
-            schedule: ScheduleConfig::default(),
+            schedule: ScheduleConfig::cpu(),
         }
     }
 }
@@ -65,9 +65,9 @@ pub const PRESETS: [&str; 2] = ["cpu", "paper"];
 
 impl TrainConfig {
     /// The training side of a preset: `cpu` (the default above: short windows, one per
-    /// step, sized to train the tiny dataset in minutes on two cores, [`TermWeights::cpu`])
-    /// or `paper` (batch 64 frames as 4 windows of 16, seed 000 supp. §4, the printed loss
-    /// weights, and a longer run).
+    /// step, sized to train the tiny dataset in minutes on two cores, [`TermWeights::cpu`],
+    /// [`ScheduleConfig::cpu`]) or `paper` (batch 64 frames as 4 windows of 16, seed 000
+    /// supp. §4, the printed loss weights and switching rules, and a longer run).
     pub fn preset(name: &str) -> Result<Self> {
         match name {
             "cpu" => Ok(TrainConfig::default()),
@@ -79,6 +79,7 @@ impl TrainConfig {
                 validate_every: 1000,
                 validation_windows: 64,
                 weights: TermWeights::default(),
+                schedule: ScheduleConfig::default(),
                 ..TrainConfig::default()
             }),
             other => Err(TrainError::config(
