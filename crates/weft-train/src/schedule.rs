@@ -118,7 +118,7 @@ impl ScheduleConfig {
     /// stretch and shear by 90 % at the latest. A 3 000-step run on the tiny dataset is 13
     /// epochs, and the rule's 50-epoch window never fires in it, so without the caps the
     /// collision term never trains. Measured on the tiny test split (docs/multilevel.md):
-    /// E_verts 44.0 → 42.6 mm and collisions 5.5 → 3.2 % against supervised-only.
+    /// E_verts 44.0 → 42.7 mm and collisions 5.5 → 3.3 % against supervised-only.
     pub fn cpu() -> Self {
         ScheduleConfig {
             supervised_max_fraction: Some(0.75),
