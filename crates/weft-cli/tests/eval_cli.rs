@@ -118,11 +118,31 @@ fn animate_exports_an_unseen_garment() {
         s(&out),
         "--betas",
         "0.8,-1.2",
+        "--push-out",
+        "4",
         "--json",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let pc2 = weft_mesh::export::pc2::read_pc2(&out).unwrap();
     assert_eq!(pc2.frames.frame_count(), 5);
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert!(report["pushed_out_vertices"].is_u64(), "{report}");
+    let o = weft(&[
+        "animate",
+        s(&d.join("run")),
+        "--garment",
+        s(&garment),
+        "--motion",
+        "walk",
+        "--format",
+        "pc2",
+        "--out",
+        s(&d.join("never.pc2")),
+        "--push-out=-1",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--push-out"), "{}", stderr(&o));
+    assert!(!d.join("never.pc2").exists());
     let glb = d.join("walk.glb");
     let o = weft(&[
         "animate",

@@ -16,6 +16,7 @@ use weft_mesh::export::{export, ExportFormat, Frames};
 use weft_mesh::TriMesh;
 use weft_models::multilevel::Predictor;
 
+use crate::baseline::PosedBodies;
 use crate::error::EvalError;
 
 /// Where a motion comes from.
@@ -133,6 +134,36 @@ pub fn animate(
         .map_err(|e| EvalError::Network(e.to_string()))
 }
 
+/// A post-process for predicted frames: every vertex inside the posed body, or closer
+/// to it than `margin` (m), moves to the closest body surface point plus `margin`
+/// outwards (weft-garment's push-out, as when a garment is fitted). The network has no
+/// hard contact constraint: legs can pass through a predicted skirt. Returns how many
+/// vertices moved over all frames. `posed` holds the body at each of the frames.
+pub fn push_out_of_body(
+    frames: &mut [Vec<[f32; 3]>],
+    posed: &PosedBodies,
+    margin: f64,
+) -> Result<usize, EvalError> {
+    if posed.len() != frames.len() {
+        return Err(EvalError::Count {
+            what: "posed body frames vs garment frames",
+            expected: frames.len(),
+            found: posed.len(),
+        });
+    }
+    let mut moved = 0;
+    for (t, frame) in frames.iter_mut().enumerate() {
+        let surface = posed.surface(t)?;
+        let mut points: Vec<[f64; 3]> = frame.iter().map(|p| p.map(f64::from)).collect();
+        moved += weft_garment::onbody::push_out(&surface, &mut points, margin)
+            .map_err(|e| EvalError::Invalid(format!("push-out of frame {t}: {e}")))?;
+        for (dst, src) in frame.iter_mut().zip(&points) {
+            *dst = src.map(|x| x as f32);
+        }
+    }
+    Ok(moved)
+}
+
 /// Writes `frames` of `garment` to `out` in `format` at `fps`; for glb, `body` (faces and
 /// frames) is added as a second animated mesh.
 pub fn write_animation(
@@ -192,5 +223,34 @@ mod tests {
             .unwrap()
             .load(&body, &[])
             .is_err());
+    }
+
+    #[test]
+    fn push_out_moves_only_vertices_inside_the_body_of_their_frame() {
+        let body = weft_body::default_body().unwrap();
+        let pelvis = body.joints(&vec![0.0; body.num_betas()]).unwrap()[0];
+        let trans = [[0.0f32; 3], [0.0, 0.3, 0.0]];
+        let posed = PosedBodies::new(&body, &[], &[[0.0; 72]; 2], &trans).unwrap();
+        let far = [0.0f32, 0.0, 2.0];
+        // The pelvis joint is inside the body in both frames, the far point outside.
+        let mut frames: Vec<Vec<[f32; 3]>> = trans
+            .iter()
+            .map(|t| {
+                let inside = [0, 1, 2].map(|c| pelvis[c] as f32 + t[c]);
+                vec![inside, far]
+            })
+            .collect();
+        let margin = 0.004;
+        let moved = push_out_of_body(&mut frames, &posed, margin).unwrap();
+        assert_eq!(moved, 2);
+        for (t, frame) in frames.iter().enumerate() {
+            assert_eq!(frame[1], far);
+            let p = frame[0].map(f64::from);
+            let d = posed.surface(t).unwrap().closest_points(&[p]).unwrap()[0].signed_distance;
+            // Outside; at most `margin` out (concave parts of the body, here the crotch,
+            // can leave it nearer than `margin` to another triangle).
+            assert!(d > 0.0 && d <= margin + 1e-6, "frame {t}: signed distance {d}");
+        }
+        assert!(push_out_of_body(&mut frames[..1], &posed, margin).is_err());
     }
 }

@@ -64,30 +64,9 @@ impl FitBody {
         Ok(g)
     }
 
-    /// Moves every point closer to the body than `margin` (or inside it) to the closest
-    /// surface point plus `margin` outwards. Four passes: a moved point can land near
-    /// another part of the body (armpit, crotch).
+    /// [`push_out`] on this body.
     pub fn push_out(&self, points: &mut [[f64; 3]], margin: f64) -> Result<(), GarmentError> {
-        for _ in 0..4 {
-            let closest = self
-                .surface
-                .closest_points(points)
-                .map_err(|e| GarmentError::Measurements(format!("closest points: {e}")))?;
-            for (p, c) in points.iter_mut().zip(&closest) {
-                if c.signed_distance >= margin {
-                    continue;
-                }
-                let offset = sub(*p, c.point);
-                let d = norm(offset);
-                let out = if d > 1e-9 {
-                    scale(offset, c.signed_distance.signum() / d)
-                } else {
-                    self.surface.face_normals()[c.triangle as usize]
-                };
-                *p = add(c.point, scale(out, margin));
-            }
-        }
-        Ok(())
+        push_out(&self.surface, points, margin).map(|_| ())
     }
 
     /// Fills `garment.weights` with `model`'s skinning weights transferred to the
@@ -126,6 +105,37 @@ impl FitBody {
             .map_err(|e| GarmentError::Measurements(format!("weight transfer: {e}")))?;
         Ok(t.weights)
     }
+}
+
+/// Moves every point closer to `surface` than `margin` (or inside it) to the closest
+/// surface point plus `margin` outwards, and returns how many points moved. Four passes:
+/// a moved point can land near another part of the body (armpit, crotch).
+pub fn push_out(
+    surface: &BodySurface,
+    points: &mut [[f64; 3]],
+    margin: f64,
+) -> Result<usize, GarmentError> {
+    let mut moved = vec![false; points.len()];
+    for _ in 0..4 {
+        let closest = surface
+            .closest_points(points)
+            .map_err(|e| GarmentError::Measurements(format!("closest points: {e}")))?;
+        for ((p, c), m) in points.iter_mut().zip(&closest).zip(&mut moved) {
+            if c.signed_distance >= margin {
+                continue;
+            }
+            let offset = sub(*p, c.point);
+            let d = norm(offset);
+            let out = if d > 1e-9 {
+                scale(offset, c.signed_distance.signum() / d)
+            } else {
+                surface.face_normals()[c.triangle as usize]
+            };
+            *p = add(c.point, scale(out, margin));
+            *m = true;
+        }
+    }
+    Ok(moved.iter().filter(|&&m| m).count())
 }
 
 /// Carries the push-out displacements to the neighbourhood of the moved vertices.

@@ -7,7 +7,7 @@ use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
-use weft_eval::animate::{animate, write_animation, MotionSpec};
+use weft_eval::animate::{animate, push_out_of_body, write_animation, MotionSpec};
 use weft_eval::PosedBodies;
 use weft_mesh::export::ExportFormat;
 use weft_models::multilevel::Predictor;
@@ -48,6 +48,12 @@ pub struct AnimateArgs {
     /// obj, pc2, mdd or glb (glb also holds the animated body).
     #[arg(long, value_name = "obj|pc2|mdd|glb")]
     format: String,
+    /// Post-process: move predicted vertices that are inside the posed body, or within
+    /// this many millimetres of it, to its surface plus that distance. The network has
+    /// no hard contact constraint (legs can pass through a predicted skirt); 4 is the
+    /// margin garments are fitted with.
+    #[arg(long, value_name = "MM")]
+    push_out: Option<f64>,
     /// Print one JSON object describing what was written.
     #[arg(long)]
     json: bool,
@@ -55,6 +61,11 @@ pub struct AnimateArgs {
 
 pub fn run(args: &AnimateArgs) -> Result<()> {
     let format: ExportFormat = args.format.parse()?;
+    if let Some(mm) = args.push_out {
+        if !(mm.is_finite() && mm >= 0.0) {
+            anyhow::bail!("--push-out {mm}: expected a distance in millimetres >= 0");
+        }
+    }
     let predictor = Predictor::load(&args.run)
         .with_context(|| format!("loading run {}", args.run.display()))?;
     let garment = weft_mesh::read_mesh(&args.garment)
@@ -63,12 +74,25 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let motion = MotionSpec::parse(&args.motion, args.frames, args.seed, args.fps)?
         .load(&body, &args.betas)?;
     let started = Instant::now();
-    let frames = animate(&predictor, &garment, &body, &args.betas, &motion)?;
+    let mut frames = animate(&predictor, &garment, &body, &args.betas, &motion)?;
     let seconds = started.elapsed().as_secs_f64();
     let poses = weft_eval::animate::flat_poses(&motion);
-    let bodies = if format == ExportFormat::Glb {
-        let posed = PosedBodies::new(&body, &args.betas, &poses, motion.trans())?;
-        Some(
+    let posed = if args.push_out.is_some() || format == ExportFormat::Glb {
+        Some(PosedBodies::new(
+            &body,
+            &args.betas,
+            &poses,
+            motion.trans(),
+        )?)
+    } else {
+        None
+    };
+    let pushed = match (args.push_out, &posed) {
+        (Some(mm), Some(posed)) => Some(push_out_of_body(&mut frames, posed, mm / 1000.0)?),
+        _ => None,
+    };
+    let bodies = match &posed {
+        Some(posed) if format == ExportFormat::Glb => Some(
             (0..posed.len())
                 .filter_map(|t| posed.mesh(t))
                 .map(|m| {
@@ -78,9 +102,8 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
                         .collect::<Vec<[f32; 3]>>()
                 })
                 .collect::<Vec<_>>(),
-        )
-    } else {
-        None
+        ),
+        _ => None,
     };
     write_animation(
         format,
@@ -98,6 +121,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             "vertices": garment.vertex_count(),
             "fps": motion.fps(),
             "inference_seconds": seconds,
+            "pushed_out_vertices": pushed,
         }))?)?;
     } else {
         emit(&format!(
@@ -110,6 +134,11 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             seconds,
             frames.len() as f64 / seconds.max(1e-9)
         ))?;
+        if let Some(n) = pushed {
+            emit(&format!(
+                "pushed {n} vertex positions (over all frames) out of the body"
+            ))?;
+        }
     }
     Ok(())
 }
