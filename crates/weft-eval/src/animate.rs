@@ -249,7 +249,10 @@ mod tests {
             let d = posed.surface(t).unwrap().closest_points(&[p]).unwrap()[0].signed_distance;
             // Outside; at most `margin` out (concave parts of the body, here the crotch,
             // can leave it nearer than `margin` to another triangle).
-            assert!(d > 0.0 && d <= margin + 1e-6, "frame {t}: signed distance {d}");
+            assert!(
+                d > 0.0 && d <= margin + 1e-6,
+                "frame {t}: signed distance {d}"
+            );
         }
         assert!(push_out_of_body(&mut frames[..1], &posed, margin).is_err());
     }
