@@ -1,56 +1,16 @@
 //! End-to-end tests of `weft train` and `weft config show` through the real binary.
 //!
-//! The dataset is made with weft-data's library and a stand-in simulator (the garment
-//! carried by the root translation), since the real simulator is slow in the test
-//! profile; what is tested here is the command, its files and its errors.
+//! The dataset is made with weft-data's library and weft-eval's stand-in simulator
+//! (LBS plus a sag), since the real simulator is slow in the test profile; what is
+//! tested here is the command, its files and its errors.
 
 use std::path::Path;
-use std::process::Output;
 
-use weft_data::{
-    generate, DataConfig, GarmentSpec, GenerateOptions, MotionSpec, SequenceSimulator, Silent,
-    SimInput, SimOutcome,
-};
+use weft_data::{generate, DataConfig, GarmentSpec, GenerateOptions, MotionSpec, Silent};
+use weft_eval::demo::StandInSimulator;
 
 mod common;
-use common::{s, scratch, weft};
-
-fn text(o: &Output) -> (String, String) {
-    (
-        String::from_utf8_lossy(&o.stdout).into_owned(),
-        String::from_utf8_lossy(&o.stderr).into_owned(),
-    )
-}
-
-/// The rest garment moved with the root.
-struct Carried;
-
-impl SequenceSimulator for Carried {
-    fn simulate(
-        &self,
-        input: &SimInput<'_>,
-        on_frame: &mut dyn FnMut(),
-    ) -> Result<SimOutcome, String> {
-        let frames = input
-            .motion
-            .trans()
-            .iter()
-            .map(|tr| {
-                on_frame();
-                input
-                    .garment
-                    .positions
-                    .iter()
-                    .map(|p| std::array::from_fn(|k| (p[k] + f64::from(tr[k])) as f32))
-                    .collect()
-            })
-            .collect();
-        Ok(SimOutcome::Finished {
-            frames,
-            stats: serde_json::json!([]),
-        })
-    }
-}
+use common::{s, scratch, stderr, stdout, weft};
 
 /// One training and one validation sequence of 3 frames, 300-vertex skirts.
 fn dataset(dir: &Path) {
@@ -74,14 +34,21 @@ fn dataset(dir: &Path) {
     c.validation.motions = vec![m("kick", 2)];
     c.test.garments = vec![g(3)];
     c.test.motions = vec![m("twist", 3)];
-    generate(&c, dir, &GenerateOptions::default(), &Carried, &Silent).expect("dataset");
+    generate(
+        &c,
+        dir,
+        &GenerateOptions::default(),
+        &StandInSimulator,
+        &Silent,
+    )
+    .expect("dataset");
 }
 
 #[test]
 fn config_show_prints_every_default_as_toml() {
     for preset in ["cpu", "paper"] {
         let o = weft(&["config", "show", "--preset", preset]);
-        let (out, err) = text(&o);
+        let (out, err) = (stdout(&o), stderr(&o));
         assert!(o.status.success(), "{err}");
         for needle in [
             "format_version = 1",
@@ -102,7 +69,7 @@ fn config_show_prints_every_default_as_toml() {
         }
     }
     let o = weft(&["config", "show", "--preset", "huge"]);
-    let (_, err) = text(&o);
+    let err = stderr(&o);
     assert!(!o.status.success());
     assert!(err.starts_with("error: ") && err.contains("huge"), "{err}");
 }
@@ -114,7 +81,7 @@ fn train_writes_a_run_resumes_and_refuses_mismatches() {
     dataset(&data);
     // A config file in the format `weft config show` prints, edited.
     let o = weft(&["config", "show"]);
-    let shown = text(&o).0;
+    let shown = stdout(&o);
     let config = dir.join("short.toml");
     std::fs::write(
         &config,
@@ -135,7 +102,7 @@ fn train_writes_a_run_resumes_and_refuses_mismatches() {
     let call = |a: Vec<String>| weft(&a.iter().map(String::as_str).collect::<Vec<_>>());
 
     let o = call(args(&["--config", s(&config), "--steps", "3"]));
-    let (out, err) = text(&o);
+    let (out, err) = (stdout(&o), stderr(&o));
     assert!(o.status.success(), "{err}");
     assert!(out.contains("trained 3 steps"), "{out}");
     assert!(out.contains("validation mean vertex error"), "{out}");
@@ -159,20 +126,20 @@ fn train_writes_a_run_resumes_and_refuses_mismatches() {
 
     // Resume of a finished run: nothing to do, success.
     let o = call(args(&["--resume"]));
-    assert!(o.status.success(), "{}", text(&o).1);
+    assert!(o.status.success(), "{}", stderr(&o));
     // A longer run is another configuration: named in the error.
     let o = call(args(&["--resume", "--config", s(&config), "--steps", "5"]));
-    let (_, err) = text(&o);
+    let err = stderr(&o);
     assert!(!o.status.success());
     assert!(err.contains("train.steps"), "{err}");
     // Another preset.
     let o = call(args(&["--resume", "--preset", "paper"]));
-    let (_, err) = text(&o);
+    let err = stderr(&o);
     assert!(!o.status.success());
     assert!(err.contains("preset"), "{err}");
     // A new run over the old one.
     let o = call(args(&["--config", s(&config), "--steps", "3"]));
-    let (_, err) = text(&o);
+    let err = stderr(&o);
     assert!(!o.status.success());
     assert!(err.contains("already holds a trained run"), "{err}");
     // No dataset.
@@ -183,7 +150,7 @@ fn train_writes_a_run_resumes_and_refuses_mismatches() {
         "--out",
         s(&dir.join("r2")),
     ]);
-    let (_, err) = text(&o);
+    let err = stderr(&o);
     assert!(!o.status.success());
     assert!(err.contains("weft data generate"), "{err}");
     assert!(!dir.join("r2").exists(), "nothing half-written");
