@@ -31,7 +31,7 @@ use weft_train::{train, MultilevelRun, MultilevelTask, RunOptions};
 use crate::animate::{animate, flat_poses, write_animation, MotionSpec};
 use crate::baseline::PosedBodies;
 use crate::error::EvalError;
-use crate::evaluate::{evaluate, write_report, EvalOptions};
+use crate::evaluate::{error_and_speed_tables, evaluate, write_report, EvalOptions};
 use crate::explain::explain_vertex;
 use crate::pictures::attribution_map;
 
@@ -393,18 +393,11 @@ pub fn run_demo(
     // The report.
     let mut html = Report::new("weft demo");
     html.paragraph(format!(
-        "A Multilevel model (seed 000, cpu preset) trained on the {} dataset in {}, evaluated on its test split (garments, body shape and motion unseen in training) against the LBS-only baseline (the body's skinning weights transferred to the garment).",
+        "A Multilevel model (seed 000, cpu preset) trained on the {} dataset in {}, evaluated on its test split (garments, body shape and motion clips unseen in training) against the LBS-only baseline (the body's skinning weights transferred to the garment).",
         if opts.quick { "micro" } else { "tiny" },
         data_dir.display()
     ));
-    html.heading("Errors against the simulated ground truth");
-    let (h, rows) = r.table();
-    html.table(h, rows);
-    if !r.fps.is_empty() {
-        html.heading("Inference speed (pair encoding cached)");
-        let (h, rows) = r.fps_table();
-        html.table(h, rows);
-    }
+    error_and_speed_tables(r, &mut html);
     for (file, caption) in [
         (
             run_dir.join("report").join("comparison.png"),

@@ -400,6 +400,19 @@ fn picture_frames(count: usize) -> Vec<usize> {
     f
 }
 
+/// The error table and, when timed, the speed table of `r` as HTML sections (the
+/// evaluation report and the demo report show the same two).
+pub(crate) fn error_and_speed_tables(r: &EvalReport, html: &mut Report) {
+    html.heading("Errors against the simulated ground truth");
+    let (h, rows) = r.table();
+    html.table(h, rows);
+    if !r.fps.is_empty() {
+        html.heading("Inference speed (pair encoding cached)");
+        let (h, rows) = r.fps_table();
+        html.table(h, rows);
+    }
+}
+
 /// Writes `dir/eval.json`, `dir/eval.md`, `dir/eval.html` and the pictures as PNG files
 /// (`comparison.png`, `error_map.png`, `per_frame.png`); returns the HTML path.
 pub fn write_report(eval: &Evaluation, dir: &Path) -> Result<std::path::PathBuf, EvalError> {
@@ -422,14 +435,7 @@ pub fn write_report(eval: &Evaluation, dir: &Path) -> Result<std::path::PathBuf,
             if x >= 0.0 { "below" } else { "above" }
         ));
     }
-    html.heading("Errors against the simulated ground truth");
-    let (h, rows) = r.table();
-    html.table(h, rows);
-    if !r.fps.is_empty() {
-        html.heading("Inference speed (pair encoding cached)");
-        let (h, rows) = r.fps_table();
-        html.table(h, rows);
-    }
+    error_and_speed_tables(r, &mut html);
     if let Some(ex) = &eval.example {
         let model_name = r.model().map_or("model", |m| m.name.as_str());
         html.heading(format!("Sequence {} ({})", ex.id, ex.kind));
