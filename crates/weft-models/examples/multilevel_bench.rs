@@ -78,6 +78,12 @@ fn sync<const D: usize>(t: Tensor<D>) {
     let _ = t.into_data();
 }
 
+/// The benchmark garment: a skirt of about `size` vertices (style seed 1) on `fit`.
+fn skirt(fit: &FitBody, size: usize) -> Result<weft_mesh::TriMesh, weft_garment::GarmentError> {
+    let style = Style::from_seed(GarmentKind::Skirt, 1);
+    Ok(fit.generate(GarmentKind::Skirt, &style, size)?.mesh)
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     retain_freed_memory();
     let a = args();
@@ -103,13 +109,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let cfg = MultilevelConfig::preset(preset)?;
         let model = Multilevel::new(&cfg, &seeded(&cpu(), 1))?;
         for &size in &a.sizes {
-            let garment = fit
-                .generate(
-                    GarmentKind::Skirt,
-                    &Style::from_seed(GarmentKind::Skirt, 1),
-                    size,
-                )?
-                .mesh;
+            let garment = skirt(&fit, size)?;
             let n = garment.vertex_count();
             let start = Instant::now();
             let g = GarmentInput::new(&garment, &body, &[], &cfg)?;
@@ -195,13 +195,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let cfg = MultilevelConfig::preset(preset)?;
             let model = Multilevel::new(&cfg, &seeded(&cpu_autodiff(), 1))?;
             for &size in &a.sizes {
-                let garment = fit
-                    .generate(
-                        GarmentKind::Skirt,
-                        &Style::from_seed(GarmentKind::Skirt, 1),
-                        size,
-                    )?
-                    .mesh;
+                let garment = skirt(&fit, size)?;
                 let n = garment.vertex_count();
                 let g = GarmentInput::new(&garment, &body, &[], &cfg)?;
                 for &t in &a.batches {
