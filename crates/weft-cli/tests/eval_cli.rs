@@ -103,11 +103,13 @@ fn animate_exports_an_unseen_garment() {
     let d = demo();
     let garment = d.join("animation").join("garment.obj");
     let out = d.join("walk.pc2");
-    let o = weft(&[
-        "animate",
-        s(&d.join("run")),
-        "--garment",
-        s(&garment),
+    let run = d.join("run");
+    let animate = |args: &[&str]| {
+        let mut all = vec!["animate", s(&run), "--garment", s(&garment)];
+        all.extend_from_slice(args);
+        weft(&all)
+    };
+    let o = animate(&[
         "--motion",
         "walk",
         "--frames",
@@ -127,11 +129,7 @@ fn animate_exports_an_unseen_garment() {
     assert_eq!(pc2.frames.frame_count(), 5);
     let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert!(report["pushed_out_vertices"].is_u64(), "{report}");
-    let o = weft(&[
-        "animate",
-        s(&d.join("run")),
-        "--garment",
-        s(&garment),
+    let o = animate(&[
         "--motion",
         "walk",
         "--format",
@@ -144,11 +142,7 @@ fn animate_exports_an_unseen_garment() {
     assert!(stderr(&o).contains("--push-out"), "{}", stderr(&o));
     assert!(!d.join("never.pc2").exists());
     let glb = d.join("walk.glb");
-    let o = weft(&[
-        "animate",
-        s(&d.join("run")),
-        "--garment",
-        s(&garment),
+    let o = animate(&[
         "--motion",
         "run",
         "--frames",
