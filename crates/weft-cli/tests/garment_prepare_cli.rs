@@ -2,50 +2,32 @@
 //! default body: outputs written, UVs kept, weights shaped and normalised, reports
 //! consistent, bad input one line of error.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 mod common;
-use common::weft;
+use common::{s, scratch, stderr, stdout, weft};
 
 fn ok(args: &[&str]) -> String {
     let out = weft(args);
     assert!(
         out.status.success(),
         "weft {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
+        stderr(&out)
     );
-    String::from_utf8_lossy(&out.stdout).into_owned()
+    stdout(&out)
 }
 
 fn fails(args: &[&str]) -> String {
     let out = weft(args);
     assert!(!out.status.success(), "weft {args:?} should fail");
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    let err = stderr(&out);
     assert!(!err.contains("panicked"), "{err}");
     err
 }
 
-struct Dir(PathBuf);
-
-impl Dir {
-    fn new(name: &str) -> Self {
-        let d = std::env::temp_dir().join(format!(
-            "weft-garment-prepare-{name}-{}",
-            std::process::id()
-        ));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).expect("temp dir");
-        Dir(d)
-    }
-    fn path(&self, f: &str) -> String {
-        self.0.join(f).display().to_string()
-    }
-}
-
-impl Drop for Dir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
+/// `name` in the scratch directory `dir`, as a command-line argument.
+fn file(dir: &Path, name: &str) -> String {
+    s(&dir.join(name)).to_owned()
 }
 
 fn vt_lines(path: &str) -> Vec<String> {
@@ -63,13 +45,13 @@ fn json(path: &str) -> serde_json::Value {
 
 #[test]
 fn resize_then_prepare_with_weights() {
-    let d = Dir::new("resize");
+    let d = scratch("resize");
     let (g, r, p, w, rep) = (
-        d.path("g.obj"),
-        d.path("r.obj"),
-        d.path("p.obj"),
-        d.path("w.npy"),
-        d.path("report.json"),
+        file(&d, "g.obj"),
+        file(&d, "r.obj"),
+        file(&d, "p.obj"),
+        file(&d, "w.npy"),
+        file(&d, "report.json"),
     );
     ok(&[
         "garment",
@@ -147,8 +129,8 @@ fn resize_then_prepare_with_weights() {
 
 #[test]
 fn drape_writes_ply_and_reports() {
-    let d = Dir::new("drape");
-    let (g, out_ply, rep) = (d.path("g.obj"), d.path("d.ply"), d.path("d.json"));
+    let d = scratch("drape");
+    let (g, out_ply, rep) = (file(&d, "g.obj"), file(&d, "d.ply"), file(&d, "d.json"));
     ok(&[
         "garment",
         "generate",
@@ -182,8 +164,8 @@ fn drape_writes_ply_and_reports() {
 
 #[test]
 fn bad_input_is_one_line_of_error() {
-    let d = Dir::new("bad");
-    let g = d.path("g.obj");
+    let d = scratch("bad");
+    let g = file(&d, "g.obj");
     ok(&[
         "garment",
         "generate",
@@ -194,7 +176,7 @@ fn bad_input_is_one_line_of_error() {
         "--out",
         &g,
     ]);
-    let out = d.path("o.obj");
+    let out = file(&d, "o.obj");
     let e = fails(&[
         "garment",
         "drape",
@@ -232,7 +214,7 @@ fn bad_input_is_one_line_of_error() {
         "garment",
         "resize",
         "--garment",
-        &d.path("missing.obj"),
+        &file(&d, "missing.obj"),
         "--to-betas",
         "1",
         "--out",
