@@ -6,16 +6,16 @@
 use std::path::Path;
 
 mod common;
-use common::weft;
+use common::{stderr, stdout, weft};
 
 #[test]
 fn help_names_the_default_directory() {
     let o = weft(&["demo", "--help"]);
     assert!(o.status.success());
-    let text = String::from_utf8_lossy(&o.stdout);
+    let text = stdout(&o);
     assert!(text.contains("[default: weft-demo]"), "{text}");
     let top = weft(&["--help"]);
-    let top = String::from_utf8_lossy(&top.stdout);
+    let top = stdout(&top);
     let first = top
         .lines()
         .skip_while(|l| !l.starts_with("Commands:"))
@@ -33,7 +33,7 @@ fn an_output_path_that_is_a_file_fails_in_one_line() {
     std::fs::write(&file, "not a directory").unwrap();
     let o = weft(&["demo", "--quick", "--out", file.to_str().unwrap()]);
     assert!(!o.status.success());
-    let e = String::from_utf8_lossy(&o.stderr);
+    let e = stderr(&o);
     assert_eq!(
         e.lines().filter(|l| l.starts_with("error")).count(),
         1,
@@ -48,12 +48,12 @@ fn quick_demo_end_to_end() {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("demo_cli_quick");
     let _ = std::fs::remove_dir_all(&dir);
     let o = weft(&["demo", "--quick", "--out", dir.to_str().unwrap()]);
-    let e = String::from_utf8_lossy(&o.stderr);
+    let e = stderr(&o);
     assert!(o.status.success(), "{e}");
     for stage in ["[1/5]", "[2/5]", "[3/5]", "[4/5]", "[5/5]"] {
         assert!(e.contains(stage), "{e}");
     }
-    let out = String::from_utf8_lossy(&o.stdout);
+    let out = stdout(&o);
     assert!(out.contains("report:"), "{out}");
     assert!(dir.join("report.html").is_file());
 }

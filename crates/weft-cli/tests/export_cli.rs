@@ -14,7 +14,7 @@ use weft_mesh::io::write_obj;
 use weft_mesh::primitives::{cylinder, grid};
 
 mod common;
-use common::{s, scratch, stderr, weft};
+use common::{s, scratch, stderr, stdout, weft};
 
 fn entries(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -117,7 +117,7 @@ fn every_format_round_trips() {
         s(&again),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let text = String::from_utf8_lossy(&o.stdout);
+    let text = stdout(&o);
     assert!(
         text.starts_with("wrote 4 frames × 6 vertices as PC2 to "),
         "{text}"
