@@ -35,7 +35,7 @@ pub enum ConfigError {
         path: PathBuf,
         /// The cause (line and column).
         #[source]
-        source: toml::de::Error,
+        source: Box<toml::de::Error>,
     },
     /// A key that the configuration does not have (a typo, or a key of another model).
     #[error("{origin}: unknown key `{key}`; expected one of: {}", expected.join(", "))]
@@ -56,7 +56,7 @@ pub enum ConfigError {
         section: String,
         /// The cause, naming the field.
         #[source]
-        source: toml::de::Error,
+        source: Box<toml::de::Error>,
     },
     /// The configuration could not be written as TOML (a value TOML cannot hold).
     #[error("the {what} configuration cannot be written as TOML")]
@@ -77,7 +77,7 @@ pub fn read_table(path: &Path) -> Result<toml::Table, ConfigError> {
     })?;
     toml::from_str(&text).map_err(|source| ConfigError::Parse {
         path: path.to_path_buf(),
-        source,
+        source: Box::new(source),
     })
 }
 
