@@ -118,7 +118,7 @@ pub fn overlay<T: Serialize + DeserializeOwned>(
         .map_err(|source| ConfigError::Value {
             origin: origin.to_string(),
             section: section.to_string(),
-            source,
+            source: Box::new(source),
         })?;
     let kept = to_table(section, &value)?;
     find_unknown(file, &kept, section).map_or(Ok(value), |(key, expected)| {
