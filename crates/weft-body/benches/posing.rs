@@ -5,8 +5,8 @@
 //! `cargo bench -p weft-body --bench posing`
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use weft_body::motion::{generate, MotionKind, ProceduralParams};
 use weft_body::{default_body, Skinning};
+use weft_motion::{generate, MotionKind, ProceduralParams};
 
 fn posing(c: &mut Criterion) {
     let model = default_body().expect("the default body loads");

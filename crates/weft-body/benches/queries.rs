@@ -16,11 +16,11 @@ use weft_body::features::{
     transfer_weights, transfer_weights_diffused, DiffusionParams, VolumetricDistance,
     VolumetricParams,
 };
-use weft_body::motion::{generate, MotionKind, ProceduralParams};
 use weft_body::query::{AabbTree, BodyEdgeRule, BodySurface, VertexTree};
 use weft_body::{default_body, Skinning};
 use weft_mesh::primitives::builtin_garment;
 use weft_mesh::Aabb;
+use weft_motion::{generate, MotionKind, ProceduralParams};
 
 fn boxes(p: &[[f64; 3]], f: &[[u32; 3]]) -> Vec<Aabb> {
     f.iter()

@@ -8,6 +8,12 @@
 /// Number of joints of an SMPL skeleton.
 pub const SMPL_JOINT_COUNT: usize = 24;
 
+/// One frame's pose: the axis-angle rotation (radians) of each of SMPL's 24 joints, in
+/// SMPL order ([`SMPL_JOINT_NAMES`]). Each rotation is local, relative to the parent
+/// joint's frame; joint 0 (the pelvis) carries the global orientation. The one pose
+/// type of motions, models, training and evaluation.
+pub type Pose = [[f32; 3]; SMPL_JOINT_COUNT];
+
 /// The joints in SMPL order. Index 0 is the root (the pelvis). "left" is the body's own
 /// left, which in SMPL's rest frame (Y up, facing +Z) lies on the +X side.
 pub const SMPL_JOINT_NAMES: [&str; SMPL_JOINT_COUNT] = [

@@ -1,7 +1,7 @@
 //! Bodies for weft: the SMPL-format body model (v_template, shapedirs, posedirs,
 //! J_regressor, weights, kintree_table, f), rotations (Rodrigues, dual quaternions),
 //! forward kinematics over the kinematic tree, linear blend and dual quaternion
-//! skinning, and motions.
+//! skinning. Motions (the poses that drive a body over time) live in `weft-motion`.
 //!
 //! A geometry crate: no learning dependency, so it builds and tests in seconds.
 
@@ -11,7 +11,6 @@ pub mod features;
 pub mod joints;
 pub mod kinematics;
 pub mod model;
-pub mod motion;
 pub mod mpfb;
 pub mod query;
 pub mod rotation;
@@ -19,5 +18,6 @@ pub mod skinning;
 
 pub use default_body::default_body;
 pub use error::BodyError;
+pub use joints::Pose;
 pub use model::{BodyModel, BodyParts, ShapedBody};
 pub use skinning::Skinning;

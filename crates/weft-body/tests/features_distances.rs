@@ -6,8 +6,8 @@ mod features_common;
 use features_common::*;
 use weft_body::features::{descriptor_for_pose, joint_distances, velocity_window, SkinningWeights};
 use weft_body::joints::{SMPL_JOINT_COUNT, SMPL_PARENTS};
-use weft_body::motion::{Motion, Pose};
 use weft_body::{BodyModel, BodyParts, Skinning};
+use weft_motion::{Motion, Pose};
 
 /// A 24-joint SMPL-layout model on an icosphere: joint `j` regressed from vertex `3j`,
 /// smooth weights, one shape direction that scales the body by 10 % per unit β.
@@ -76,8 +76,8 @@ fn velocities_of_a_translating_body() {
     let poses: Vec<Pose> = vec![[[0.0f32; 3]; SMPL_JOINT_COUNT]; frames];
     let trans: Vec<[f32; 3]> = (0..frames).map(|t| [0.05 * t as f32, 0.0, 0.0]).collect();
     let motion = Motion::new(30.0, poses, trans, None).unwrap();
-    let w = model
-        .velocity_window(&shaped, &motion, 3, 5, Skinning::Lbs)
+    let w = motion
+        .velocity_window(&model, &shaped, 3, 5, Skinning::Lbs)
         .unwrap();
     assert_eq!(
         (w.frame_count(), w.vertex_count()),
@@ -93,8 +93,8 @@ fn velocities_of_a_translating_body() {
         assert!(w.frame(k).iter().all(|v| *v == [0.0; 3]));
     }
     assert_eq!(w.to_f32().len(), 5 * 3 * model.vertex_count());
-    assert!(model
-        .velocity_window(&shaped, &motion, frames, 2, Skinning::Lbs)
+    assert!(motion
+        .velocity_window(&model, &shaped, frames, 2, Skinning::Lbs)
         .is_err());
     // Mismatched frame sizes are an error, not a panic.
     let ragged = vec![vec![[0.0; 3]; 3], vec![[0.0; 3]; 2]];

@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use weft_body::motion::MotionKind;
+use weft_motion::MotionKind;
 use weft_garment::GarmentKind;
 
 use crate::error::DataError;

@@ -117,7 +117,7 @@ pub enum DataError {
         id: String,
         /// weft-body's reason.
         #[source]
-        source: Box<weft_body::motion::MotionError>,
+        source: Box<weft_motion::MotionError>,
     },
     /// Reading or writing a mesh failed.
     #[error("mesh")]

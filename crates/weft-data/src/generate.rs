@@ -23,7 +23,7 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 use rayon::prelude::*;
-use weft_body::motion::{
+use weft_motion::{
     generate as procedural_motion, read_motion, resample, Motion, MotionFileOptions, MotionKind,
     ProceduralParams,
 };
@@ -685,16 +685,7 @@ fn run_sequence(
     if t > 0 {
         let data = ShardData {
             positions: frames,
-            poses: motion.poses()[..t]
-                .iter()
-                .map(|p| {
-                    let mut flat = [0.0f32; POSE_VALUES];
-                    for (dst, src) in flat.chunks_exact_mut(3).zip(p) {
-                        dst.copy_from_slice(src);
-                    }
-                    flat
-                })
-                .collect(),
+            poses: motion.poses()[..t].to_vec(),
             trans: motion.trans()[..t].to_vec(),
             betas: r.betas.clone(),
             rest_positions: garment

@@ -5,7 +5,7 @@
 //! `--shard i/n` job and every resumed run computes the same plan, and sequence `index`
 //! means the same sequence everywhere.
 
-use weft_body::motion::MotionKind;
+use weft_motion::MotionKind;
 use weft_garment::rng::SplitMix64;
 
 use crate::config::{DataConfig, FORMAT_VERSION};

@@ -407,8 +407,8 @@ fn the_real_simulator_generates_a_small_dataset() {
 
 #[test]
 fn file_motions_are_resampled_and_windowed() {
-    use weft_body::motion::{generate as procedural, write_motion, MotionFileOptions};
-    use weft_body::motion::{MotionKind, ProceduralParams};
+    use weft_motion::{generate as procedural, write_motion, MotionFileOptions};
+    use weft_motion::{MotionKind, ProceduralParams};
     let dir = scratch("file-motion");
     // A 60 fps walk of 20 frames written as AMASS .npz; the dataset runs at 30 fps.
     let mut params = ProceduralParams::new(MotionKind::Walk);

@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use weft_body::motion::{
+use weft_motion::{
     generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams,
 };
 use weft_body::BodyModel;

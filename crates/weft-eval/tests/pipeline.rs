@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use weft_body::motion::{generate, MotionKind, ProceduralParams};
+use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_data::{SequenceRecord, Split};
 use weft_eval::evaluate::{write_report, EvalOptions, Evaluator};
 use weft_eval::explain::explain_vertex;

@@ -6,7 +6,7 @@
 //! procedural motion. Prints one line
 //! per frame and the mean time per frame after the warm-up.
 
-use weft_body::motion::{generate, MotionKind, ProceduralParams};
+use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_sim::sequence::test_skirt;
 use weft_sim::{simulate_sequence, Material, SequenceOptions};
 

@@ -14,7 +14,7 @@
 
 use std::time::Instant;
 
-use weft_body::motion::Motion;
+use weft_motion::Motion;
 use weft_body::{BodyError, BodyModel, ShapedBody, Skinning};
 use weft_mesh::vec3::{add_scaled, dist};
 use weft_mesh::TriMesh;
@@ -522,7 +522,7 @@ pub fn test_skirt(body_rest: &[[f64; 3]], around: usize, rings: usize) -> TriMes
 #[cfg(test)]
 mod tests {
     use super::*;
-    use weft_body::motion::{generate, MotionKind, ProceduralParams};
+    use weft_motion::{generate, MotionKind, ProceduralParams};
 
     fn walk(frames: usize) -> Motion {
         let mut p = ProceduralParams::new(MotionKind::Walk);

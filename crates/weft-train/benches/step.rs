@@ -12,7 +12,7 @@ use std::time::Duration;
 use burn::module::Module;
 use burn::optim::GradientsParams;
 use criterion::{criterion_group, criterion_main, Criterion};
-use weft_body::motion::{generate, MotionKind, ProceduralParams};
+use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_models::multilevel::{Multilevel, MultilevelConfig};
 use weft_nn::backend::{cpu_autodiff, retain_freed_memory, seeded};

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::Tensor;
-use weft_body::motion::{generate, MotionKind, ProceduralParams};
+use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_models::multilevel::{Multilevel, MultilevelConfig, Predictor};
 use weft_nn::backend::{cpu_autodiff, seeded};

@@ -1,6 +1,6 @@
 //! Thin conveniences that compute the features from the body model's own types
 //! ([`BodyModel`], [`ShapedBody`], [`SkinWeights`], forward-kinematics [`Rigid`]
-//! transforms, [`Motion`]). Everything here is a few lines over the slice-based
+//! transforms). Everything here is a few lines over the slice-based
 //! functions of the sibling modules, which stay the reference.
 
 use super::descriptor::{
@@ -9,12 +9,10 @@ use super::descriptor::{
 use super::distances::joint_distances;
 use super::error::FeatureError;
 use super::matrix::FeatureMatrix;
-use super::velocity::{velocity_window, VelocityWindow};
 use super::weights::SkinningWeights;
 use crate::kinematics::Rigid;
-use crate::motion::Motion;
 use crate::query::{BodySurface, QueryError};
-use crate::skinning::{SkinWeights, Skinning};
+use crate::skinning::SkinWeights;
 use crate::{BodyModel, ShapedBody};
 
 impl TryFrom<&SkinWeights> for SkinningWeights {
@@ -96,34 +94,5 @@ impl BodyModel {
         check_parents(parents)?;
         let relative = relative_rotations(parents, pose, None)?;
         relative_skinning_descriptor(&shaped.vertices, &self.skinning_weights()?, &relative)
-    }
-
-    /// Seed 000's `V^t` for frame `t` of `motion`: the window of `m` body-vertex
-    /// velocity frames, current first (see [`super::velocity`]). Poses only the
-    /// `m + 1` frames the window needs.
-    pub fn velocity_window(
-        &self,
-        shaped: &ShapedBody,
-        motion: &Motion,
-        t: usize,
-        m: usize,
-        method: Skinning,
-    ) -> Result<VelocityWindow, FeatureError> {
-        if t >= motion.frame_count() {
-            return Err(FeatureError::FrameOutOfRange {
-                frame: t,
-                frames: motion.frame_count(),
-            });
-        }
-        let first = t.saturating_sub(m);
-        let frames = (first..=t)
-            .map(|k| {
-                let pose: Vec<[f64; 3]> =
-                    motion.poses()[k].iter().map(|w| w.map(f64::from)).collect();
-                self.pose_vertices(shaped, &pose, motion.trans()[k].map(f64::from), method)
-                    .map_err(|e| FeatureError::Posing(e.to_string()))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        velocity_window(&frames, motion.fps(), t - first, m)
     }
 }

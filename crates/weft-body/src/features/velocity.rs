@@ -12,7 +12,7 @@
 //!
 //! Layout. A window at frame `t` holds `m` frames, **current frame first**
 //! (`t, t − 1, …, t − m + 1`, clamped at frame 0), each `N_b × 3` — the order of the
-//! pose history `Θ^t` in [`crate::motion::pose_history`], as the paper writes both sets;
+//! pose history `Θ^t` in `weft_motion::pose_history`, as the paper writes both sets;
 //! an LSTM that reads oldest first iterates the slots in reverse.
 //! [`VelocityWindow::to_f32`] flattens it to `m × 3N_b`, one time step per row.
 

@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use weft_body::default_body::DEFAULT_BODY_NAME;
-use weft_body::motion::{
+use weft_motion::{
     generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams,
 };
 use weft_body::{default_body, BodyModel};

@@ -13,7 +13,7 @@
 use std::ops::Range;
 
 use weft_body::features::velocity_window;
-use weft_body::motion::{pose_history, Motion, Pose};
+use weft_motion::{pose_history, Motion, Pose};
 use weft_body::skinning::Skinning;
 use weft_body::BodyModel;
 
@@ -22,7 +22,7 @@ use super::garment::{betas_f64, body_sample_indices, check_body};
 use crate::error::ModelError;
 
 /// Numbers per frame of the pose history: 24 axis-angles and the root velocity.
-pub const POSE_FEATURES: usize = weft_body::motion::HISTORY_FEATURES;
+pub const POSE_FEATURES: usize = weft_motion::HISTORY_FEATURES;
 
 /// Per-frame inputs of a window of frames; see the module documentation.
 #[derive(Clone, Debug)]

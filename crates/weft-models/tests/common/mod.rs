@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use weft_body::motion::{generate, MotionKind, ProceduralParams};
+use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_body::BodyModel;
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_mesh::TriMesh;

@@ -15,12 +15,12 @@
 use std::path::Path;
 
 use super::error::MotionError;
-use crate::joints::{smpl_joint_index, SMPL_JOINT_NAMES};
+use weft_body::joints::{smpl_joint_index, SMPL_JOINT_NAMES};
 
 /// The key a joint name is looked up by: lower case, without a namespace prefix.
 ///
 /// ```
-/// use weft_body::motion::normalize_joint_name;
+/// use weft_motion::normalize_joint_name;
 /// assert_eq!(normalize_joint_name("mixamorig:LeftUpLeg"), "leftupleg");
 /// assert_eq!(normalize_joint_name("Armature|upperleg01.L"), "upperleg01.l");
 /// ```

@@ -17,8 +17,8 @@
 //! forward with −Y, the left elbow bends with −Y. The right side mirrors the left:
 //! same X range, Y and Z ranges negated.
 
-use super::types::Pose;
-use crate::joints::{SMPL_JOINT_COUNT, SMPL_MIRROR};
+use weft_body::joints::{SMPL_JOINT_COUNT, SMPL_MIRROR};
+use weft_body::Pose;
 
 /// `[min, max]` in degrees for the X, Y and Z axis-angle components of each joint,
 /// SMPL order.

@@ -1,7 +1,7 @@
 //! Motions: what a body does over time, as SMPL poses.
 //!
 //! A [`Motion`] is a frame rate, one pose per frame — an axis-angle rotation for each of
-//! SMPL's 24 joints, in SMPL's order ([`crate::joints::SMPL_JOINT_NAMES`]) — and one root
+//! SMPL's 24 joints, in SMPL's order ([`weft_body::joints::SMPL_JOINT_NAMES`]) — and one root
 //! translation per frame, in SMPL's own frame: right-handed, Y up, metres, the rest body
 //! facing +Z with its left on +X.
 //!
@@ -22,6 +22,7 @@
 //! See `docs/motions.md` for the formats, conventions and methods in one place.
 
 mod amass;
+mod body_velocity;
 mod bvh;
 mod error;
 mod file;
@@ -60,4 +61,5 @@ pub use retarget::{
 };
 pub use smpl_bvh::{motion_to_bvh, smpl_bvh_skeleton, write_bvh};
 pub use stats::{motion_stats, JointRange, MotionStats};
-pub use types::{Motion, MotionDistance, Pose, MAX_FRAMES};
+pub use types::{Motion, MotionDistance, MAX_FRAMES};
+pub use weft_body::Pose;

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
 use weft_body::joints::{smpl_joint_index, SMPL_JOINT_COUNT};
-use weft_body::motion::{
+use weft_motion::{
     generate, motion_to_bvh, posed_joints, read_motion, retarget_bvh, write_bvh, Bvh, BvhJoint,
     BvhUnits, Channel, MapChoice, Motion, MotionError, MotionFileOptions, MotionKind, MotionSource,
     NameMap, ProceduralParams, RetargetOptions, SkeletonPreset, UpAxis, DEFAULT_REST_JOINTS,

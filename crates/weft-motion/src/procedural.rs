@@ -33,8 +33,9 @@ use super::limits::{soft_limit, soft_limit_pose};
 use super::rest::DEFAULT_REST_JOINTS;
 use super::rng::SplitMix64;
 use super::rot::about_axis;
-use super::types::{Motion, Pose, MAX_FRAMES};
-use crate::joints::SMPL_JOINT_COUNT;
+use super::types::{Motion, MAX_FRAMES};
+use weft_body::joints::SMPL_JOINT_COUNT;
+use weft_body::Pose;
 
 /// The motions of the procedural library.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -8,7 +8,7 @@
 //! in x. They are not SMPL's regressed joints, which come with SMPL's licence; pass a
 //! body's own J(β) wherever a function takes rest joints to match that body exactly.
 
-use crate::joints::SMPL_JOINT_COUNT;
+use weft_body::joints::SMPL_JOINT_COUNT;
 
 /// Rest-pose joint positions (metres, Y up, facing +Z), SMPL order.
 pub const DEFAULT_REST_JOINTS: [[f64; 3]; SMPL_JOINT_COUNT] = [
@@ -45,7 +45,7 @@ pub(crate) fn check_rest_joints(joints: &[[f64; 3]; SMPL_JOINT_COUNT]) -> Result
         if p.iter().any(|x| !x.is_finite()) {
             return Err(format!(
                 "rest joint {j} ({}) is {p:?}; expected finite coordinates",
-                crate::joints::SMPL_JOINT_NAMES[j]
+                weft_body::joints::SMPL_JOINT_NAMES[j]
             ));
         }
     }
@@ -55,7 +55,7 @@ pub(crate) fn check_rest_joints(joints: &[[f64; 3]; SMPL_JOINT_COUNT]) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::joints::{SMPL_MIRROR, SMPL_PARENTS};
+    use weft_body::joints::{SMPL_MIRROR, SMPL_PARENTS};
 
     #[test]
     fn default_skeleton_is_symmetric_and_human_sized() {

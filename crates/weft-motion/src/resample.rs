@@ -9,7 +9,8 @@
 
 use super::error::MotionError;
 use super::rot::{axis_angle, quat};
-use super::types::{Motion, Pose, MAX_FRAMES};
+use super::types::{Motion, MAX_FRAMES};
+use weft_body::Pose;
 
 /// The motion at `fps` frames per second (see the module documentation). Fails for a
 /// non-positive or non-finite rate, or when the result would exceed [`MAX_FRAMES`]
@@ -47,7 +48,7 @@ pub fn resample(motion: &Motion, fps: f64) -> Result<Motion, MotionError> {
             out_trans.push(trans[i]);
             continue;
         }
-        let mut pose = [[0.0f32; 3]; crate::joints::SMPL_JOINT_COUNT];
+        let mut pose = [[0.0f32; 3]; weft_body::joints::SMPL_JOINT_COUNT];
         for (j, r) in pose.iter_mut().enumerate() {
             let (a, b) = (quat(poses[i][j]), quat(poses[i + 1][j]));
             // Only exactly opposite quaternions have no slerp; after the sign flip to
@@ -73,7 +74,7 @@ pub fn resample(motion: &Motion, fps: f64) -> Result<Motion, MotionError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::joints::SMPL_JOINT_COUNT;
+    use weft_body::joints::SMPL_JOINT_COUNT;
 
     /// A joint turning at constant angular velocity about a fixed axis, root moving at
     /// constant velocity: interpolation is then exact.

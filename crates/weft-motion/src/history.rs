@@ -14,7 +14,7 @@
 
 use super::error::MotionError;
 use super::types::Motion;
-use crate::joints::SMPL_JOINT_COUNT;
+use weft_body::joints::SMPL_JOINT_COUNT;
 
 /// Numbers per frame in Θᵗ: 3 · (24 joints + the root displacement).
 pub const HISTORY_FEATURES: usize = 3 * (SMPL_JOINT_COUNT + 1);

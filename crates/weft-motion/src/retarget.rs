@@ -43,8 +43,9 @@ use super::error::MotionError;
 use super::names::{NameMap, SkeletonPreset};
 use super::rest::{check_rest_joints, DEFAULT_REST_JOINTS};
 use super::rot::{axis_angle, shortest_arc};
-use super::types::{Motion, Pose, MAX_FRAMES};
-use crate::joints::{SMPL_JOINT_COUNT, SMPL_JOINT_NAMES, SMPL_PARENTS};
+use super::types::{Motion, MAX_FRAMES};
+use weft_body::joints::{SMPL_JOINT_COUNT, SMPL_JOINT_NAMES, SMPL_PARENTS};
+use weft_body::Pose;
 
 /// Which axis points up in a source file. weft's frame is Y up; a Z-up file is turned
 /// by −90° about X, taking (x, y, z) to (x, z, −y).
@@ -486,7 +487,7 @@ mod tests {
 
     #[test]
     fn a_file_without_frames_is_an_error() {
-        let joints = crate::motion::smpl_bvh::smpl_bvh_skeleton(&DEFAULT_REST_JOINTS);
+        let joints = crate::smpl_bvh::smpl_bvh_skeleton(&DEFAULT_REST_JOINTS);
         let bvh = Bvh::new(joints, 0.1, vec![]).unwrap();
         let e = retarget_bvh(&bvh, Path::new("e.bvh"), &RetargetOptions::default()).unwrap_err();
         assert_eq!(e.to_string(), "e.bvh: the file has no frames ('Frames: 0')");

@@ -10,7 +10,7 @@ use super::rest::DEFAULT_REST_JOINTS;
 use super::retarget::{retarget_bvh, BvhUnits, MapChoice, RetargetOptions, RetargetReport, UpAxis};
 use super::smpl_bvh::write_bvh;
 use super::types::Motion;
-use crate::joints::SMPL_JOINT_COUNT;
+use weft_body::joints::SMPL_JOINT_COUNT;
 
 /// A motion file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 
 use super::types::Motion;
-use crate::joints::{SMPL_JOINT_COUNT, SMPL_JOINT_NAMES};
+use weft_body::joints::{SMPL_JOINT_COUNT, SMPL_JOINT_NAMES};
 
 /// The range one joint's rotation covers over a motion.
 #[derive(Clone, Debug, PartialEq)]

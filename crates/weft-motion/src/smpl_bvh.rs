@@ -19,7 +19,7 @@ use super::error::MotionError;
 use super::rest::check_rest_joints;
 use super::rot::quat;
 use super::types::Motion;
-use crate::joints::{SMPL_JOINT_COUNT, SMPL_JOINT_NAMES, SMPL_PARENTS};
+use weft_body::joints::{SMPL_JOINT_COUNT, SMPL_JOINT_NAMES, SMPL_PARENTS};
 
 const ROTATIONS: [Channel; 3] = [Channel::Zrotation, Channel::Yrotation, Channel::Xrotation];
 
@@ -130,7 +130,7 @@ pub fn write_bvh(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::rest::DEFAULT_REST_JOINTS;
+    use crate::rest::DEFAULT_REST_JOINTS;
 
     #[test]
     fn euler_channels_reproduce_the_rotation() {

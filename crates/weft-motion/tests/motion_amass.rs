@@ -4,12 +4,12 @@
 use std::path::PathBuf;
 
 use nalgebra::{UnitQuaternion, Vector3};
-use weft_body::motion::{
+use weft_mesh::io::npz::NpzWriter;
+use weft_motion::{
     amass_npz, generate, posed_joints, read_amass, read_motion, write_amass, write_motion,
     AmassOptions, Motion, MotionError, MotionFileOptions, MotionKind, PoseLayout, ProceduralParams,
     UpAxis, DEFAULT_REST_JOINTS,
 };
-use weft_mesh::io::npz::NpzWriter;
 
 mod motion_common;
 use motion_common::TempDir;

@@ -6,8 +6,8 @@
 use nalgebra::{UnitQuaternion, Vector3};
 
 use super::rot::quat;
-use super::types::Pose;
-use crate::joints::{SMPL_JOINT_COUNT, SMPL_PARENTS};
+use weft_body::joints::{SMPL_JOINT_COUNT, SMPL_PARENTS};
+use weft_body::Pose;
 
 /// Global joint rotations of `pose`: `G_j = G_parent · R_j`, `G_0 = R_0`.
 pub(crate) fn global_rotations(pose: &Pose) -> [UnitQuaternion<f64>; SMPL_JOINT_COUNT] {
@@ -50,7 +50,7 @@ pub fn posed_joints(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::rest::DEFAULT_REST_JOINTS;
+    use crate::rest::DEFAULT_REST_JOINTS;
 
     #[test]
     fn rest_pose_gives_rest_joints_and_a_knee_bend_moves_the_ankle_back() {

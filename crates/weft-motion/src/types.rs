@@ -5,12 +5,8 @@ use nalgebra::Vector3;
 
 use super::error::MotionError;
 use super::rot::quat;
-use crate::joints::{SMPL_JOINT_COUNT, SMPL_JOINT_NAMES};
-
-/// One frame's pose: the axis-angle rotation (radians) of each of SMPL's 24 joints, in
-/// SMPL order ([`SMPL_JOINT_NAMES`]). Each rotation is local, relative to the parent
-/// joint's frame; joint 0 (the pelvis) carries the global orientation.
-pub type Pose = [[f32; 3]; SMPL_JOINT_COUNT];
+use weft_body::joints::SMPL_JOINT_NAMES;
+use weft_body::Pose;
 
 /// The largest motion weft builds in memory: 10 million frames, about 3 GB of poses
 /// (an hour of 120 fps capture is 432 000 frames). Readers and generators refuse longer
@@ -174,6 +170,7 @@ impl Motion {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use weft_body::joints::SMPL_JOINT_COUNT;
 
     fn still(frames: usize) -> (Vec<Pose>, Vec<[f32; 3]>) {
         (

@@ -2,7 +2,7 @@
 //! resampling and pose histories on its motions.
 
 use nalgebra::{UnitQuaternion, Vector3};
-use weft_body::motion::{
+use weft_motion::{
     generate, limit_violation, motion_stats, pose_histories, posed_joints, resample, Motion,
     MotionKind, ProceduralParams, DEFAULT_REST_JOINTS, HISTORY_FEATURES,
 };

@@ -46,8 +46,9 @@ use super::error::MotionError;
 use super::rest::DEFAULT_REST_JOINTS;
 use super::retarget::UpAxis;
 use super::rot::{axis_angle, quat};
-use super::types::{Motion, Pose, MAX_FRAMES};
-use crate::joints::SMPL_JOINT_COUNT;
+use super::types::{Motion, MAX_FRAMES};
+use weft_body::joints::SMPL_JOINT_COUNT;
+use weft_body::Pose;
 
 /// Joints shared by SMPL, SMPL-H and SMPL-X (pelvis to wrists).
 const SHARED_JOINTS: usize = 22;
