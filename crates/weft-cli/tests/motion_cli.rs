@@ -217,8 +217,8 @@ fn bvh_maps_and_scales_from_the_command_line() {
 /// built-in skeleton scaled by `scale`), each vertex its own joint's.
 fn tiny_body(path: &Path, scale: f64) {
     use weft_body::joints::SMPL_PARENTS;
-    use weft_motion::DEFAULT_REST_JOINTS;
     use weft_mesh::io::npz::NpzWriter;
+    use weft_motion::DEFAULT_REST_JOINTS;
     let n = 24;
     let v: Vec<f64> = DEFAULT_REST_JOINTS
         .iter()
