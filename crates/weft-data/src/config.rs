@@ -13,8 +13,8 @@
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use weft_motion::MotionKind;
 use weft_garment::GarmentKind;
+use weft_motion::MotionKind;
 
 use crate::error::DataError;
 use crate::split::Split;

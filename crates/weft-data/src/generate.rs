@@ -23,12 +23,12 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 use rayon::prelude::*;
+use weft_body::BodyModel;
+use weft_garment::{FitBody, Garment, GarmentKind, Style};
 use weft_motion::{
     generate as procedural_motion, read_motion, resample, Motion, MotionFileOptions, MotionKind,
     ProceduralParams,
 };
-use weft_body::BodyModel;
-use weft_garment::{FitBody, Garment, GarmentKind, Style};
 use weft_sim::Material;
 
 use crate::config::DataConfig;

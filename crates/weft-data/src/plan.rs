@@ -5,8 +5,8 @@
 //! `--shard i/n` job and every resumed run computes the same plan, and sequence `index`
 //! means the same sequence everywhere.
 
-use weft_motion::MotionKind;
 use weft_garment::rng::SplitMix64;
+use weft_motion::MotionKind;
 
 use crate::config::{DataConfig, FORMAT_VERSION};
 use crate::error::DataError;

@@ -7,14 +7,12 @@
 
 use std::path::Path;
 
-use weft_motion::{
-    generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams,
-};
 use weft_body::BodyModel;
 use weft_mesh::export::gltf::{write_glb, GlbMesh, GlbOptions, BODY_COLOR, GARMENT_COLOR};
 use weft_mesh::export::{export, ExportFormat, Frames};
 use weft_mesh::TriMesh;
 use weft_models::multilevel::Predictor;
+use weft_motion::{generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams};
 
 use crate::baseline::PosedBodies;
 use crate::error::EvalError;

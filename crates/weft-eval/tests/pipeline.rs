@@ -4,7 +4,6 @@
 
 use std::path::PathBuf;
 
-use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_data::{SequenceRecord, Split};
 use weft_eval::evaluate::{write_report, EvalOptions, Evaluator};
 use weft_eval::explain::explain_vertex;
@@ -12,6 +11,7 @@ use weft_eval::{LbsBaseline, LBS_NAME};
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_mesh::TriMesh;
 use weft_models::multilevel::{Multilevel, MultilevelConfig, Predictor};
+use weft_motion::{generate, MotionKind, ProceduralParams};
 
 struct TempDir(PathBuf);
 

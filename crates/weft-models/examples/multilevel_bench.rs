@@ -11,9 +11,9 @@
 use std::time::Instant;
 
 use burn::tensor::{Distribution, Tensor};
-use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_models::multilevel::{FrameInputs, GarmentInput, Multilevel, MultilevelConfig};
+use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_nn::backend::{cpu, cpu_autodiff, retain_freed_memory, seeded};
 
 struct Args {

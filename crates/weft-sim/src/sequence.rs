@@ -14,10 +14,10 @@
 
 use std::time::Instant;
 
-use weft_motion::Motion;
 use weft_body::{BodyError, BodyModel, ShapedBody, Skinning};
 use weft_mesh::vec3::{add_scaled, dist};
 use weft_mesh::TriMesh;
+use weft_motion::Motion;
 
 use crate::attachment::{Attachment, SkinAnchors};
 use crate::body::{Penetration, PosedBody};

@@ -7,9 +7,9 @@ use std::path::PathBuf;
 
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::Tensor;
-use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_models::multilevel::{Multilevel, MultilevelConfig, Predictor};
+use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_nn::backend::{cpu_autodiff, seeded};
 use weft_train::multilevel::carried_sequence;
 use weft_train::{train, MultilevelTask, Phase, RunDir, RunOptions, TrainConfig};

@@ -6,10 +6,10 @@ use serde_json::json;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use weft_body::joints::{SMPL_JOINT_COUNT, SMPL_JOINT_NAMES};
-use weft_motion::{read_motion, MotionFileOptions, MotionSource};
 use weft_body::mpfb::{import_mpfb, ImportOptions, RestPose};
 use weft_body::{BodyModel, Skinning};
 use weft_mesh::io::write_mesh;
+use weft_motion::{read_motion, MotionFileOptions, MotionSource};
 
 use super::emit;
 
@@ -414,8 +414,8 @@ fn import(args: &ImportArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use weft_motion::{generate, write_motion, MotionKind, ProceduralParams};
     use weft_mesh::io::read_mesh;
+    use weft_motion::{generate, write_motion, MotionKind, ProceduralParams};
 
     fn temp(tag: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!("weft-cli-body-{tag}-{}", std::process::id()));

@@ -7,11 +7,11 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use weft_body::default_body::DEFAULT_BODY_NAME;
 use weft_body::joints::SMPL_JOINT_COUNT;
+use weft_body::{default_body, BodyModel};
 use weft_motion::{
     generate, motion_stats, read_motion, write_motion, BvhUnits, MapChoice, MotionFileOptions,
     MotionFormat, MotionKind, MotionSource, NameMap, ProceduralParams, SkeletonPreset, UpAxis,
 };
-use weft_body::{default_body, BodyModel};
 
 use super::emit;
 

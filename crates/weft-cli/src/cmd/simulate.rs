@@ -8,12 +8,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use weft_body::default_body::DEFAULT_BODY_NAME;
-use weft_motion::{
-    generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams,
-};
 use weft_body::{default_body, BodyModel};
 use weft_mesh::export::{write_obj_sequence, write_pc2, Frames, Pc2Timing};
 use weft_mesh::io::{load_mesh, write_atomic};
+use weft_motion::{generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams};
 use weft_sim::{
     simulate_sequence, Attachment, FrameStats, Material, SequenceError, SequenceOptions,
     SimulatedSequence,

@@ -13,9 +13,9 @@
 use std::ops::Range;
 
 use weft_body::features::velocity_window;
-use weft_motion::{pose_history, Motion, Pose};
 use weft_body::skinning::Skinning;
 use weft_body::BodyModel;
+use weft_motion::{pose_history, Motion, Pose};
 
 use super::config::MultilevelConfig;
 use super::garment::{betas_f64, body_sample_indices, check_body};

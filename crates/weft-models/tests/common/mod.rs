@@ -3,10 +3,10 @@
 
 #![allow(dead_code)]
 
-use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_body::BodyModel;
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_mesh::TriMesh;
+use weft_motion::{generate, MotionKind, ProceduralParams};
 
 /// One test case.
 pub struct Case {
