@@ -45,6 +45,33 @@ pub enum ModelError {
         /// What is wrong with it.
         message: String,
     },
+    /// A file of a run directory could not be read.
+    #[error("{}: cannot read", path.display())]
+    RunRead {
+        /// The file or directory.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A run's config.toml that is not TOML.
+    #[error("{}: not valid TOML", path.display())]
+    RunToml {
+        /// The file.
+        path: PathBuf,
+        /// The cause (line and column).
+        #[source]
+        source: toml::de::Error,
+    },
+    /// A run's config.toml naming a model this build does not know.
+    #[error("{}: model_kind", path.display())]
+    RunKind {
+        /// The file.
+        path: PathBuf,
+        /// The unknown name and the known ones.
+        #[source]
+        source: crate::kind::UnknownModelKind,
+    },
 }
 
 impl ModelError {

@@ -37,11 +37,7 @@ fn task(model: &MultilevelConfig, window: usize) -> MultilevelTask {
     let mut params = ProceduralParams::new(MotionKind::parse("walk").expect("walk"));
     params.frames = 16;
     let motion = generate(&params).expect("walk");
-    let poses = motion
-        .poses()
-        .iter()
-        .map(|p| std::array::from_fn(|k| p[k / 3][k % 3]))
-        .collect();
+    let poses = motion.poses().to_vec();
     let seq = carried_sequence(
         "bench",
         garment,

@@ -24,13 +24,41 @@ pub enum TrainError {
         /// The cause.
         source: std::io::Error,
     },
-    /// A config.toml or a trainer state that does not parse.
+    /// A file of the run that is not what it should be (a metrics log line, a
+    /// `latest` pointer).
     #[error("{}: {message}", path.display())]
     Parse {
         /// The file.
         path: PathBuf,
         /// What is wrong.
         message: String,
+    },
+    /// A config file that is not valid TOML.
+    #[error("{}: not valid TOML", path.display())]
+    Toml {
+        /// The file.
+        path: PathBuf,
+        /// The cause (line and column).
+        #[source]
+        source: toml::de::Error,
+    },
+    /// A trainer state or metrics record that is not valid JSON.
+    #[error("{}: not a valid training record", path.display())]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A configuration or record that cannot be written out.
+    #[error("{what} cannot be written")]
+    Write {
+        /// What was being written.
+        what: String,
+        /// The cause.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
     },
     /// A checkpoint that does not belong to this run's configuration.
     #[error(
@@ -49,12 +77,13 @@ pub enum TrainError {
         expected: String,
     },
     /// A model record or optimizer record burn could not read or apply.
-    #[error("{}: {message}", path.display())]
+    #[error("{}: cannot read or apply the record", path.display())]
     Record {
         /// The file.
         path: PathBuf,
-        /// burn's message.
-        message: String,
+        /// burn's error.
+        #[source]
+        source: burn::store::RecordError,
     },
     /// `--resume` on a directory without a checkpoint, or a new run over an old one.
     #[error("{}: {message}", path.display())]
@@ -90,20 +119,41 @@ pub enum TrainError {
         found: String,
     },
     /// A physics term rejected its input.
-    #[error("physics loss: {0}")]
+    #[error("physics loss")]
     Sim(#[from] weft_sim::SimError),
-    /// A body query failed (non-finite prediction, empty body).
-    #[error("collision loss: {0}")]
-    Query(String),
+    /// The posed body for the collision loss could not be built.
+    #[error("collision loss: the posed body")]
+    Body(#[from] weft_body::BodyError),
     /// A network layer rejected its input.
-    #[error("network: {0}")]
+    #[error("network")]
     Nn(#[from] weft_nn::NnError),
     /// Drawing the curves.
-    #[error("training curves: {0}")]
+    #[error("training curves")]
     Render(#[from] weft_render::RenderError),
-    /// An error of the model or data crate, passed through with its message.
-    #[error("{0}")]
-    Model(String),
+    /// The run directory (weft-models owns its layout) or the model refused something.
+    #[error(transparent)]
+    Model(#[from] weft_models::ModelError),
+    /// The model refused the inputs of one training sequence.
+    #[error("sequence {id}")]
+    Sequence {
+        /// The sequence.
+        id: String,
+        /// The cause.
+        #[source]
+        source: weft_models::ModelError,
+    },
+    /// The dataset could not be read.
+    #[error(transparent)]
+    Data(#[from] weft_data::DataError),
+    /// A tensor could not be read back to the host.
+    #[error("reading {what} back from the device")]
+    Tensor {
+        /// Which tensor.
+        what: &'static str,
+        /// burn's error.
+        #[source]
+        source: burn::tensor::DataError,
+    },
 }
 
 /// Shorthand.

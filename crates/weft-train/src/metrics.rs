@@ -131,8 +131,10 @@ impl MetricsLog {
 }
 
 fn line_of(r: &Record) -> Result<String> {
-    let mut s =
-        serde_json::to_string(r).map_err(|e| TrainError::Model(format!("metrics record: {e}")))?;
+    let mut s = serde_json::to_string(r).map_err(|e| TrainError::Write {
+        what: "metrics record".into(),
+        source: Box::new(e),
+    })?;
     s.push('\n');
     Ok(s)
 }

@@ -24,11 +24,14 @@ use std::sync::Arc;
 
 use burn::module::ParamGroup;
 use burn::tensor::{Device, Tensor};
-use weft_body::{BodyModel, Skinning};
+use weft_body::{BodyModel, Pose, PosedSequence};
 use weft_data::{Dataset, Sequence, Split};
 use weft_models::multilevel::{
     FrameInputs, GarmentInput, Multilevel, MultilevelConfig, PairEncoding,
 };
+use weft_models::run::RunHeader;
+use weft_models::Clip;
+use weft_models::ModelKind;
 use weft_sim::{PosedBody, RestFrames};
 
 use crate::config::TrainConfig;
@@ -70,7 +73,7 @@ impl MultilevelRun {
     pub fn preset(name: &str) -> Result<Self> {
         Ok(MultilevelRun {
             preset: name.to_string(),
-            model: MultilevelConfig::preset(name).map_err(models)?,
+            model: MultilevelConfig::preset(name)?,
             train: TrainConfig::preset(name)?,
         })
     }
@@ -82,9 +85,9 @@ impl MultilevelRun {
         let table: Option<toml::Table> = match file {
             Some(path) => {
                 let text = std::fs::read_to_string(path).map_err(|e| TrainError::io(path, e))?;
-                Some(toml::from_str(&text).map_err(|e| TrainError::Parse {
+                Some(toml::from_str(&text).map_err(|source| TrainError::Toml {
                     path: path.to_path_buf(),
-                    message: e.to_string(),
+                    source,
                 })?)
             }
             None => None,
@@ -109,10 +112,22 @@ impl MultilevelRun {
             message,
         };
         for key in table.keys() {
-            if !["format_version", "preset", "model", "train"].contains(&key.as_str()) {
+            if !["format_version", "model_kind", "preset", "model", "train"].contains(&key.as_str())
+            {
                 return Err(parse(format!(
-                    "unknown key `{key}` (expected format_version, preset, [model], [train])"
+                    "unknown key `{key}` (expected format_version, model_kind, preset, [model], \
+                     [train])"
                 )));
+            }
+        }
+        if let Some(v) = table.get("model_kind") {
+            if v.as_str() != Some(ModelKind::Multilevel.name()) {
+                return Err(TrainError::Mismatch {
+                    path: path.to_path_buf(),
+                    field: "model_kind".into(),
+                    found: v.to_string(),
+                    expected: ModelKind::Multilevel.name().into(),
+                });
             }
         }
         if let Some(v) = table.get("format_version") {
@@ -160,13 +175,19 @@ impl MultilevelRun {
 
     /// The run directory `dir` for this configuration.
     pub fn run_dir(&self, dir: &Path) -> Result<RunDir> {
-        RunDir::new(dir, &self.preset, &self.model, &self.train)
+        RunDir::new(
+            dir,
+            ModelKind::Multilevel,
+            &self.preset,
+            &self.model,
+            &self.train,
+        )
     }
 
     /// The full configuration as config.toml text (every default written out).
     pub fn to_toml(&self) -> Result<String> {
         crate::run::config_text(
-            &self.preset,
+            &RunHeader::new(ModelKind::Multilevel, &self.preset),
             &crate::run::to_table("model config", &self.model)?,
             &self.train,
         )
@@ -218,14 +239,15 @@ pub struct MultilevelTask {
     cache_encodings: bool,
 }
 
-fn models(e: weft_models::ModelError) -> TrainError {
-    TrainError::Model(e.to_string())
-}
-
 impl Pair {
     fn new(seq: Sequence, body: &BodyModel, cfg: &MultilevelConfig) -> Result<Self> {
-        let input = GarmentInput::new(&seq.garment, body, &seq.record.betas, cfg)
-            .map_err(|e| TrainError::Model(format!("sequence {}: {e}", seq.record.id)))?;
+        let input =
+            GarmentInput::new(&seq.garment, body, &seq.record.betas, cfg).map_err(|source| {
+                TrainError::Sequence {
+                    id: seq.record.id.clone(),
+                    source,
+                }
+            })?;
         let topology = GarmentTopology::new(&seq.garment)?;
         let uvs = (seq.corner_uvs.len() == seq.garment.face_count()).then_some(&seq.corner_uvs[..]);
         let frames = rest_frames(&seq.garment, uvs)?;
@@ -237,6 +259,16 @@ impl Pair {
         })
     }
 
+    /// The sequence's motion on its body shape.
+    fn clip(&self) -> Clip<'_> {
+        Clip {
+            betas: &self.seq.record.betas,
+            poses: &self.seq.poses,
+            trans: &self.seq.trans,
+            fps: self.seq.record.fps,
+        }
+    }
+
     fn window_data(
         &self,
         range: Range<usize>,
@@ -245,16 +277,13 @@ impl Pair {
         device: &Device,
     ) -> Result<WindowData> {
         let s = &self.seq;
-        let frames = FrameInputs::new(
-            body,
-            &s.record.betas,
-            &s.poses,
-            &s.trans,
-            s.record.fps,
-            range.clone(),
-            cfg,
-        )
-        .map_err(|e| TrainError::Model(format!("sequence {}: {e}", s.record.id)))?;
+        let frames =
+            FrameInputs::new(body, &self.clip(), range.clone(), cfg).map_err(|source| {
+                TrainError::Sequence {
+                    id: s.record.id.clone(),
+                    source,
+                }
+            })?;
         let targets = Targets::new(
             &self.topology,
             &s.garment.faces,
@@ -267,22 +296,17 @@ impl Pair {
     /// The posed body of each frame of `range`, as collision surfaces.
     fn posed_bodies(&self, range: Range<usize>, body: &BodyModel) -> Result<Vec<PosedBody>> {
         let s = &self.seq;
-        let betas: Vec<f64> = s.record.betas.iter().map(|&b| f64::from(b)).collect();
-        let shaped = body
-            .shaped(&betas)
-            .map_err(|e| TrainError::Query(e.to_string()))?;
-        let poses: Vec<[[f32; 3]; 24]> = s.poses[range.clone()]
-            .iter()
-            .map(|p| std::array::from_fn(|j| [p[3 * j], p[3 * j + 1], p[3 * j + 2]]))
-            .collect();
-        let posed = body
-            .pose_frames(&shaped, &poses, &s.trans[range], Skinning::Lbs)
-            .map_err(|e| TrainError::Query(e.to_string()))?;
-        posed
-            .iter()
-            .map(|v| {
-                let p: Vec<[f64; 3]> = v.iter().map(|q| q.map(f64::from)).collect();
-                PosedBody::new(&p, body.faces()).map_err(TrainError::from)
+        let posed = PosedSequence::new(
+            body,
+            &s.record.betas,
+            &s.poses[range.clone()],
+            &s.trans[range],
+        )?;
+        (0..posed.len())
+            .map(|t| {
+                let frame = posed.frame(t).unwrap_or(&[]);
+                let p: Vec<[f64; 3]> = frame.iter().map(|q| q.map(f64::from)).collect();
+                PosedBody::new(&p, posed.faces()).map_err(TrainError::from)
             })
             .collect()
     }
@@ -358,13 +382,12 @@ impl MultilevelTask {
         train_cfg: &TrainConfig,
         device: &Device,
     ) -> Result<Self> {
-        let data = |e: weft_data::DataError| TrainError::Model(e.to_string());
-        let dataset = Dataset::open(dir).map_err(data)?;
+        let dataset = Dataset::open(dir)?;
         let load = |split: Split| -> Result<Vec<Sequence>> {
             dataset
                 .records_in(split)
                 .into_iter()
-                .map(|r| dataset.load(r).map_err(data))
+                .map(|r| dataset.load(r).map_err(TrainError::from))
                 .collect()
         };
         let train = load(Split::Train)?;
@@ -375,7 +398,7 @@ impl MultilevelTask {
             });
         }
         let validation = load(Split::Validation)?;
-        let body = dataset.body_model().map_err(data)?;
+        let body = dataset.body_model()?;
         Self::new(cfg, train_cfg, body, train, validation, device)
     }
 
@@ -405,7 +428,7 @@ impl MultilevelTask {
                 return Ok(e.clone());
             }
         }
-        let e = model.encode_pair(&self.train[pair].input).map_err(models)?;
+        let e = model.encode_pair(&self.train[pair].input)?;
         if self.cache_encodings {
             let detached = PairEncoding {
                 fused: e.fused.clone().detach(),
@@ -424,7 +447,7 @@ impl MultilevelTask {
 pub fn carried_sequence(
     id: &str,
     garment: weft_mesh::TriMesh,
-    poses: Vec<[f32; 72]>,
+    poses: Vec<Pose>,
     trans: Vec<[f32; 3]>,
     fps: f64,
 ) -> Sequence {
@@ -476,7 +499,10 @@ fn host_positions(x: &Tensor<3>) -> Result<Vec<[f64; 3]>> {
         .to_data()
         .convert::<f64>()
         .try_into_vec::<f64>()
-        .map_err(|e| TrainError::Model(format!("reading the prediction: {e:?}")))?;
+        .map_err(|source| TrainError::Tensor {
+            what: "the prediction",
+            source,
+        })?;
     Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
 }
 
@@ -497,9 +523,7 @@ impl TrainTask for MultilevelTask {
         let (p, range) = self.items[item].clone();
         let enc = self.encoding(model, p)?;
         let pair = &self.train[p];
-        let pred = model
-            .forward(&enc, &pair.input, &w.frames)
-            .map_err(models)?;
+        let pred = model.forward(&enc, &pair.input, &w.frames)?;
         let x = pred.vertices;
         let t = range.len();
         let n = pair.topology.vertex_count();
@@ -551,23 +575,14 @@ impl TrainTask for MultilevelTask {
             let enc = match encodings.get(&p) {
                 Some(e) => e.clone(),
                 None => {
-                    let e = model.encode_pair(&pair.input).map_err(models)?;
+                    let e = model.encode_pair(&pair.input)?;
                     encodings.insert(p, e.clone());
                     e
                 }
             };
             let s = &pair.seq;
-            let frames = FrameInputs::new(
-                &self.body,
-                &s.record.betas,
-                &s.poses,
-                &s.trans,
-                s.record.fps,
-                range.clone(),
-                &self.cfg,
-            )
-            .map_err(models)?;
-            let pred = model.forward(&enc, &pair.input, &frames).map_err(models)?;
+            let frames = FrameInputs::new(&self.body, &pair.clip(), range.clone(), &self.cfg)?;
+            let pred = model.forward(&enc, &pair.input, &frames)?;
             let n = pair.topology.vertex_count();
             let host: Vec<Vec<[f32; 3]>> = host_positions(&pred.vertices.to_device(&device))?
                 .chunks(n)

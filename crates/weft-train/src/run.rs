@@ -1,24 +1,22 @@
-//! The run directory and its checkpoints.
+//! The trainer's side of a run directory: config.toml, checkpoints and resume.
 //!
-//! ```text
-//! RUN/config.toml                      format_version, preset, [model], [train]
-//! RUN/checkpoints/step-000250.bpk      model parameters (burn module record, burnpack)
-//! RUN/checkpoints/step-000250.optim.bpk  Adamax state (burn optimizer record, burnpack)
-//! RUN/checkpoints/step-000250.state.json step, data cursor, schedule, config fingerprint
-//! RUN/checkpoints/latest               text: the file name of the newest model record
-//! RUN/metrics.jsonl, RUN/curves.png    see crate::metrics
-//! ```
+//! The layout, the header (`format_version`, `model_kind`, `preset`) and the `latest`
+//! pointer belong to [`weft_models::run`], which every reader uses too; this module adds
+//! what only training needs: the optimiser record and the trainer state of each
+//! checkpoint, refusing a resume whose configuration differs, and the commit order.
 //!
 //! The model record is what `Module::save_file` writes, so weft-models' `Predictor`
 //! reads it with `Module::try_load_file` without knowing about the rest. Every file is
 //! written atomically (temporary file + rename, `weft_mesh::io::write_atomic`), the three
 //! files of a checkpoint first and `latest` last: `latest` is the commit point, so a run
-//! killed at any instant resumes from a complete checkpoint.
+//! killed at any instant resumes from a complete checkpoint. Older checkpoints beyond
+//! `keep_checkpoints` are deleted only after the new `latest` is written, never the one
+//! it names.
 //!
 //! burnpack stores each parameter with its `ParamId`, and burn's optimizer record keys the
-//! Adamax state by the same ids, so model, optimizer state and the cosine schedule
-//! (a pure function of the step) come back exactly: a resumed run on the CPU continues
-//! bit for bit.
+//! optimiser state by the same ids, so model, optimizer state and the learning-rate
+//! schedule (whose state is in the trainer state) come back exactly: a resumed run on the
+//! CPU continues bit for bit.
 
 use std::path::{Path, PathBuf};
 
@@ -28,14 +26,14 @@ use burn::store::ModuleRecord;
 use burn::tensor::Bytes;
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
 use weft_mesh::io::write_atomic;
+pub use weft_models::run::FORMAT_VERSION;
+use weft_models::run::{RunHeader, RunLayout};
+use weft_models::ModelKind;
 
 use crate::config::TrainConfig;
 use crate::error::{Result, TrainError};
 use crate::sampler::Cursor;
 use crate::schedule::ScheduleState;
-
-/// Version of the run directory format this crate writes (weft-models reads the same).
-pub const FORMAT_VERSION: i64 = 1;
 
 /// Everything besides parameters and optimizer state that a resumed run needs.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -62,16 +60,18 @@ pub struct TrainerState {
 /// A run directory; see the module documentation.
 #[derive(Clone, Debug)]
 pub struct RunDir {
-    root: PathBuf,
-    preset: String,
+    layout: RunLayout,
+    header: RunHeader,
     model_toml: toml::Table,
     train: TrainConfig,
 }
 
 /// `value` as a TOML table.
 pub fn to_table<T: Serialize>(what: &str, value: &T) -> Result<toml::Table> {
-    toml::Table::try_from(value)
-        .map_err(|e| TrainError::Model(format!("{what} as a TOML table: {e}")))
+    toml::Table::try_from(value).map_err(|e| TrainError::Write {
+        what: what.to_string(),
+        source: Box::new(e),
+    })
 }
 
 /// The first key (dotted path) where two tables differ, with both values.
@@ -103,18 +103,19 @@ fn first_difference(
 }
 
 impl RunDir {
-    /// The run at `root` for `preset`, model configuration `model` and training
-    /// configuration `train` (nothing is written yet).
+    /// The run of model `kind` at `root` for `preset`, model configuration `model` and
+    /// training configuration `train` (nothing is written yet).
     pub fn new<M: Serialize>(
         root: &Path,
+        kind: ModelKind,
         preset: &str,
         model: &M,
         train: &TrainConfig,
     ) -> Result<Self> {
         train.validate()?;
         Ok(RunDir {
-            root: root.to_path_buf(),
-            preset: preset.to_string(),
+            layout: RunLayout::new(root),
+            header: RunHeader::new(kind, preset),
             model_toml: to_table("model config", model)?,
             train: train.clone(),
         })
@@ -122,7 +123,12 @@ impl RunDir {
 
     /// The directory.
     pub fn root(&self) -> &Path {
-        &self.root
+        self.layout.root()
+    }
+
+    /// Its paths.
+    pub fn layout(&self) -> &RunLayout {
+        &self.layout
     }
 
     /// The training configuration.
@@ -132,69 +138,75 @@ impl RunDir {
 
     /// The preset name.
     pub fn preset(&self) -> &str {
-        &self.preset
+        &self.header.preset
     }
 
     /// `RUN/checkpoints`.
     pub fn checkpoints(&self) -> PathBuf {
-        self.root.join("checkpoints")
+        self.layout.checkpoints()
     }
 
     /// `RUN/config.toml`.
     pub fn config_path(&self) -> PathBuf {
-        self.root.join("config.toml")
+        self.layout.config()
     }
 
     /// The config.toml text of this run.
     pub fn config_text(&self) -> Result<String> {
-        let mut t = toml::Table::new();
-        t.insert(
-            "format_version".into(),
-            toml::Value::Integer(FORMAT_VERSION),
-        );
-        t.insert("preset".into(), toml::Value::String(self.preset.clone()));
-        t.insert("model".into(), toml::Value::Table(self.model_toml.clone()));
-        t.insert(
-            "train".into(),
-            toml::Value::Table(to_table("train config", &self.train)?),
-        );
-        toml::to_string(&t).map_err(|e| TrainError::Model(format!("config.toml: {e}")))
+        config_text(&self.header, &self.model_toml, &self.train)
     }
 
     /// Starts a fresh run: refuses a directory that already holds a checkpoint (resume it
     /// or choose another), writes config.toml.
     pub fn start(&self) -> Result<()> {
-        if self.checkpoints().join("latest").exists() {
+        if self.layout.latest().exists() {
             return Err(TrainError::RunDir {
-                path: self.root.clone(),
+                path: self.root().to_path_buf(),
                 message: "already holds a trained run (checkpoints/latest); pass --resume to \
                           continue it or choose another --out directory"
                     .into(),
             });
         }
-        std::fs::create_dir_all(self.checkpoints())
-            .map_err(|e| TrainError::io(self.checkpoints(), e))?;
+        let dir = self.checkpoints();
+        std::fs::create_dir_all(&dir).map_err(|e| TrainError::io(dir, e))?;
         let text = self.config_text()?;
-        let path = self.config_path();
-        write_atomic(&path, |w| w.write_all(text.as_bytes())).map_err(|e| TrainError::io(path, e))
+        write_file(&self.config_path(), text.as_bytes())
     }
 
-    /// Checks that the run on disk is this configuration: config.toml's format version,
-    /// preset, `[model]` and `[train]` tables; errors name the first field that differs.
+    /// Checks that the run on disk is this configuration: config.toml's header (format
+    /// version, model kind, preset), `[model]` and `[train]` tables; errors name the
+    /// first field that differs. A config.toml written before `model_kind` existed is a
+    /// Multilevel run.
     pub fn check_existing(&self) -> Result<()> {
+        let (found_header, mut found) = weft_models::run::read_run_config(self.root())?;
         let path = self.config_path();
-        let text = std::fs::read_to_string(&path).map_err(|e| TrainError::io(&path, e))?;
-        let found: toml::Table = toml::from_str(&text).map_err(|e| TrainError::Parse {
-            path: path.clone(),
-            message: e.to_string(),
-        })?;
-        let expected: toml::Table = toml::from_str(&self.config_text()?)
-            .map_err(|e| TrainError::Model(format!("config.toml: {e}")))?;
-        // Version and preset first: they explain every other difference.
-        for key in ["format_version", "preset"] {
-            if found.get(key) != expected.get(key) {
-                return Err(self.mismatch(&path, key, found.get(key), expected.get(key)));
+        // Version, model and preset first: they explain every other difference.
+        let show = |v: &dyn std::fmt::Display| v.to_string();
+        for (field, f, e) in [
+            (
+                "model_kind",
+                show(&found_header.model),
+                show(&self.header.model),
+            ),
+            (
+                "preset",
+                format!("{:?}", found_header.preset),
+                format!("{:?}", self.header.preset),
+            ),
+        ] {
+            if f != e {
+                return Err(TrainError::Mismatch {
+                    path,
+                    field: field.into(),
+                    found: f,
+                    expected: e,
+                });
             }
+        }
+        let mut expected = self.tables()?;
+        for key in RunHeader::KEYS {
+            found.remove(key);
+            expected.remove(key);
         }
         if let Some((field, f, e)) = first_difference("", &found, &expected) {
             return Err(TrainError::Mismatch {
@@ -207,25 +219,14 @@ impl RunDir {
         Ok(())
     }
 
-    fn mismatch(
-        &self,
-        path: &Path,
-        field: &str,
-        found: Option<&toml::Value>,
-        expected: Option<&toml::Value>,
-    ) -> TrainError {
-        let show = |v: Option<&toml::Value>| v.map_or("absent".to_string(), ToString::to_string);
-        TrainError::Mismatch {
-            path: path.to_path_buf(),
-            field: field.into(),
-            found: show(found),
-            expected: show(expected),
-        }
+    /// The config.toml of this run as a table.
+    fn tables(&self) -> Result<toml::Table> {
+        config_table(&self.header, &self.model_toml, &self.train)
     }
 
     /// The file name stem of the checkpoint at `step`.
     pub fn stem(step: usize) -> String {
-        format!("step-{step:06}")
+        RunLayout::stem(step)
     }
 
     /// Writes the checkpoint of `state.step`: model record, optimizer record, state, then
@@ -239,46 +240,32 @@ impl RunDir {
         let dir = self.checkpoints();
         std::fs::create_dir_all(&dir).map_err(|e| TrainError::io(&dir, e))?;
         let stem = Self::stem(state.step);
-        let record_err = |path: &Path, e: burn::store::RecordError| TrainError::Record {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        };
-        let model_path = dir.join(format!("{stem}.bpk"));
+        let model_path = self.layout.model_record(&stem);
         let bytes = model
             .clone()
             .into_record()
             .into_bytes()
             .map_err(|e| record_err(&model_path, e))?;
         write_file(&model_path, &bytes)?;
-        let optim_path = dir.join(format!("{stem}.optim.bpk"));
+        let optim_path = self.layout.optimizer_record(&stem);
         let bytes = optim.into_bytes().map_err(|e| record_err(&optim_path, e))?;
         write_file(&optim_path, &bytes)?;
-        let state_path = dir.join(format!("{stem}.state.json"));
-        let json = serde_json::to_vec_pretty(state)
-            .map_err(|e| TrainError::Model(format!("trainer state: {e}")))?;
+        let state_path = self.layout.state(&stem);
+        let json = serde_json::to_vec_pretty(state).map_err(|e| TrainError::Write {
+            what: "trainer state".into(),
+            source: Box::new(e),
+        })?;
         write_file(&state_path, &json)?;
-        write_file(&dir.join("latest"), format!("{stem}.bpk\n").as_bytes())?;
+        write_file(
+            &self.layout.latest(),
+            RunLayout::latest_text(&stem).as_bytes(),
+        )?;
         Ok(model_path)
     }
 
     /// The stem `latest` names, if any.
     pub fn latest(&self) -> Result<Option<String>> {
-        let path = self.checkpoints().join("latest");
-        match std::fs::read_to_string(&path) {
-            Ok(text) => {
-                let name = text.trim();
-                let stem = name.strip_suffix(".bpk").filter(|s| {
-                    s.starts_with("step-") && !s.contains(['/', '\\']) && !s.contains(".optim")
-                });
-                stem.map(|s| Some(s.to_string()))
-                    .ok_or_else(|| TrainError::Parse {
-                        path,
-                        message: format!("expected a name like step-000100.bpk, found {name:?}"),
-                    })
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-            Err(e) => Err(TrainError::io(path, e)),
-        }
+        Ok(self.layout.latest_stem()?)
     }
 
     /// Loads the latest checkpoint into `fresh` (a model of this run's configuration) and
@@ -289,13 +276,12 @@ impl RunDir {
         optim: ModuleOptimizer,
     ) -> Result<(M, ModuleOptimizer, TrainerState)> {
         let stem = self.latest()?.ok_or_else(|| TrainError::RunDir {
-            path: self.root.clone(),
+            path: self.root().to_path_buf(),
             message:
                 "no checkpoint to resume (checkpoints/latest is missing); start without --resume"
                     .into(),
         })?;
-        let dir = self.checkpoints();
-        let state_path = dir.join(format!("{stem}.state.json"));
+        let state_path = self.layout.state(&stem);
         let state: TrainerState = read_json(&state_path)?;
         if state.format_version != FORMAT_VERSION {
             return Err(TrainError::Mismatch {
@@ -305,18 +291,18 @@ impl RunDir {
                 expected: FORMAT_VERSION.to_string(),
             });
         }
-        if state.preset != self.preset {
+        if state.preset != self.header.preset {
             return Err(TrainError::Mismatch {
                 path: state_path,
                 field: "preset".into(),
                 found: state.preset.clone(),
-                expected: self.preset.clone(),
+                expected: self.header.preset.clone(),
             });
         }
         let model_table: toml::Table =
-            toml::from_str(&state.model).map_err(|e| TrainError::Parse {
+            toml::from_str(&state.model).map_err(|source| TrainError::Toml {
                 path: state_path.clone(),
-                message: format!("model: {e}"),
+                source,
             })?;
         if let Some((field, found, expected)) =
             first_difference("model.", &model_table, &self.model_toml)
@@ -328,17 +314,13 @@ impl RunDir {
                 expected,
             });
         }
-        let model_path = dir.join(format!("{stem}.bpk"));
-        let record_err = |path: &Path, e: burn::store::RecordError| TrainError::Record {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        };
+        let model_path = self.layout.model_record(&stem);
         let record = ModuleRecord::from_bytes(Bytes::from_bytes_vec(read_file(&model_path)?))
             .map_err(|e| record_err(&model_path, e))?;
         let model = fresh
             .try_load_record(record)
             .map_err(|e| record_err(&model_path, e))?;
-        let optim_path = dir.join(format!("{stem}.optim.bpk"));
+        let optim_path = self.layout.optimizer_record(&stem);
         let optim = optim
             .from_bytes(Bytes::from_bytes_vec(read_file(&optim_path)?))
             .map_err(|e| record_err(&optim_path, e))?;
@@ -347,26 +329,44 @@ impl RunDir {
 
     /// The `[model]` table as TOML text (for [`TrainerState::model`]).
     pub fn model_text(&self) -> Result<String> {
-        toml::to_string(&self.model_toml)
-            .map_err(|e| TrainError::Model(format!("model config: {e}")))
+        toml::to_string(&self.model_toml).map_err(|e| TrainError::Write {
+            what: "model config".into(),
+            source: Box::new(e),
+        })
     }
 }
 
-/// The text of a run's config.toml: format version, preset, `[model]`, `[train]` (what
-/// `weft config show` prints and `weft train --config` reads back).
-pub fn config_text(preset: &str, model: &toml::Table, train: &TrainConfig) -> Result<String> {
+fn record_err(path: &Path, source: burn::store::RecordError) -> TrainError {
+    TrainError::Record {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// config.toml as a table: the header, `[model]`, `[train]`.
+fn config_table(
+    header: &RunHeader,
+    model: &toml::Table,
+    train: &TrainConfig,
+) -> Result<toml::Table> {
     let mut t = toml::Table::new();
-    t.insert(
-        "format_version".into(),
-        toml::Value::Integer(FORMAT_VERSION),
-    );
-    t.insert("preset".into(), toml::Value::String(preset.to_string()));
+    header.insert_into(&mut t);
     t.insert("model".into(), toml::Value::Table(model.clone()));
     t.insert(
         "train".into(),
         toml::Value::Table(to_table("train config", train)?),
     );
-    toml::to_string(&t).map_err(|e| TrainError::Model(format!("config.toml: {e}")))
+    Ok(t)
+}
+
+/// The text of a run's config.toml: the header (format version, model kind, preset),
+/// `[model]`, `[train]` (what `weft config show` prints and `weft train --config` reads
+/// back).
+pub fn config_text(header: &RunHeader, model: &toml::Table, train: &TrainConfig) -> Result<String> {
+    toml::to_string(&config_table(header, model, train)?).map_err(|e| TrainError::Write {
+        what: "config.toml".into(),
+        source: Box::new(e),
+    })
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
@@ -379,8 +379,8 @@ fn read_file(path: &Path) -> Result<Vec<u8>> {
 
 fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {
     let bytes = read_file(path)?;
-    serde_json::from_slice(&bytes).map_err(|e| TrainError::Parse {
+    serde_json::from_slice(&bytes).map_err(|source| TrainError::Json {
         path: path.to_path_buf(),
-        message: e.to_string(),
+        source,
     })
 }

@@ -11,6 +11,7 @@ use burn::tensor::{DType, Device, Tensor, TensorData};
 use serde::Serialize;
 use weft_mesh::primitives::grid;
 use weft_mesh::TriMesh;
+use weft_models::ModelKind;
 use weft_nn::backend::{cpu_autodiff, seeded};
 use weft_sim::Sphere;
 use weft_train::loss::{
@@ -257,7 +258,7 @@ fn params(model: &Toy) -> Vec<u32> {
 }
 
 fn run_in(dir: &Path, cfg: &TrainConfig, toy: &ToyConfig, preset: &str) -> RunDir {
-    RunDir::new(dir, preset, toy, cfg).unwrap()
+    RunDir::new(dir, ModelKind::Multilevel, preset, toy, cfg).unwrap()
 }
 
 #[test]

@@ -9,6 +9,7 @@ use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::Tensor;
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_models::multilevel::{Multilevel, MultilevelConfig, Predictor};
+use weft_models::ModelKind;
 use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_nn::backend::{cpu_autodiff, seeded};
 use weft_train::multilevel::carried_sequence;
@@ -32,11 +33,7 @@ fn sequence(id: &str, seed: u64) -> (weft_body::BodyModel, weft_data::Sequence) 
     let mut params = ProceduralParams::new(MotionKind::parse("walk").expect("walk"));
     params.frames = FRAMES;
     let motion = generate(&params).expect("walk");
-    let poses: Vec<[f32; 72]> = motion
-        .poses()
-        .iter()
-        .map(|p| std::array::from_fn(|k| p[k / 3][k % 3]))
-        .collect();
+    let poses = motion.poses().to_vec();
     let seq = carried_sequence(id, garment, poses, motion.trans().to_vec(), motion.fps());
     (body, seq)
 }
@@ -109,7 +106,14 @@ fn multilevel_trains_through_every_phase_and_resumes_bit_for_bit() {
     assert_eq!(t.validation_window_count(), 2);
 
     let straight_dir = temp_dir("straight");
-    let run = RunDir::new(&straight_dir, "cpu", &model_cfg, &cfg).unwrap();
+    let run = RunDir::new(
+        &straight_dir,
+        ModelKind::Multilevel,
+        "cpu",
+        &model_cfg,
+        &cfg,
+    )
+    .unwrap();
     let (straight, outcome) = train(
         &mut t,
         fresh(&model_cfg, cfg.seed),
@@ -135,7 +139,7 @@ fn multilevel_trains_through_every_phase_and_resumes_bit_for_bit() {
     }
 
     let split_dir = temp_dir("split");
-    let run = RunDir::new(&split_dir, "cpu", &model_cfg, &cfg).unwrap();
+    let run = RunDir::new(&split_dir, ModelKind::Multilevel, "cpu", &model_cfg, &cfg).unwrap();
     let mut t = task(&model_cfg, &cfg);
     let half = RunOptions {
         session_steps: Some(3),

@@ -109,16 +109,16 @@ pub struct TermWeights {
 
 impl Default for TermWeights {
     fn default() -> Self {
-        let paper = weft_sim::MultilevelWeights::paper();
+        // k_c, k_g, k_s, k_h as printed in supplement §2.
         TermWeights {
             vertex: 100.0,
             edge: 15.0,
             normal: 50.0,
-            collision: paper.k_c,
-            gravity: paper.k_g,
-            stretch: paper.k_s,
-            shear: paper.k_h,
-            collision_eps: paper.eps,
+            collision: 1.5,
+            gravity: 0.1,
+            stretch: 5.0,
+            shear: 2.0,
+            collision_eps: weft_sim::collision::HOOD_COLLISION_EPS,
             collision_radius: 0.05,
             density: weft_sim::Material::cotton().density,
         }

@@ -3,7 +3,7 @@
 //! weft-sim's energies, the same code the simulator minimises.
 //!
 //! Why a custom operation: the energies are f64 host code with exact, finite-difference
-//! checked gradients (`weft_sim::multilevel_losses`). Writing them again as burn tensor
+//! checked gradients (`weft_sim::penalties`). Writing them again as burn tensor
 //! expressions would give a second, untested copy of every formula (and a much longer
 //! autodiff graph: the stretch term alone is a 3×2 deformation gradient, two norms and a
 //! product per face). Instead the prediction crosses to f64 at one boundary, the energy
@@ -314,7 +314,10 @@ fn reference(x: Tensor<3>, energy: &FrameEnergies) -> Result<Tensor<1>> {
         .to_data()
         .convert::<f64>()
         .try_into_vec::<f64>()
-        .map_err(|e| TrainError::Model(format!("physics loss: reading positions: {e:?}")))?;
+        .map_err(|source| TrainError::Tensor {
+            what: "the physics loss' positions",
+            source,
+        })?;
     let xs = triples(&host, |v| v);
     let (value, grad) = match energy.gradient(&xs, 1.0) {
         Ok(vg) => vg,

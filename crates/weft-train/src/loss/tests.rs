@@ -228,7 +228,7 @@ fn physics_terms_match_central_differences_on_both_paths() {
             })
             .sum::<f64>()
             / t as f64;
-        if energy.name() != "multilevel collision" {
+        if energy.name() != "linear collision" {
             assert!((energy.value(&xs).unwrap() - per_frame).abs() < 1e-12);
         }
     }
