@@ -6,7 +6,7 @@
 //! penalty ([`CubicCollision`]) and implicit-Euler inertia ([`Inertia`]) into the
 //! incremental potential ([`IncrementalPotential`]); minimising it over the end-of-step
 //! positions is one implicit-Euler step, and its value is HOOD's self-supervised loss.
-//! Seed 000's unsupervised losses (supplement eq. 4–8) are in [`multilevel_losses`].
+//! Seed 000's unsupervised losses (supplement eq. 4–8) are in [`penalties`].
 //!
 //! Every energy implements [`Energy`]: value, gradient, and a Hessian, exact or
 //! projected to positive semi-definite per element ([`HessianKind`]), scattered into a
@@ -33,7 +33,7 @@ pub mod inertia;
 pub mod material;
 mod math;
 pub mod membrane;
-pub mod multilevel_losses;
+pub mod penalties;
 pub mod potential;
 pub mod sequence;
 pub mod solver;
@@ -55,7 +55,7 @@ pub use gravity::{lumped_masses, Gravity, STANDARD_GRAVITY};
 pub use inertia::{inertial_target, Inertia};
 pub use material::Material;
 pub use membrane::RestFrames;
-pub use multilevel_losses::{LinearCollision, MultilevelWeights, UvShear, UvStretch};
+pub use penalties::{LinearCollision, UvShear, UvStretch};
 pub use potential::{IncrementalPotential, Term, WeightedTerm};
 pub use sequence::{
     simulate_sequence, FrameStats, SequenceError, SequenceOptions, SimulatedSequence,

@@ -331,6 +331,45 @@ pub(crate) fn face_stencils(frames: &RestFrames, f: &mut dyn FnMut(&[u32])) {
     }
 }
 
+/// `impl Energy for $t` over its `frames: RestFrames` field and its [`MembraneDensity`]:
+/// the one membrane energy impl, for StVK stretching and the UV stretch and shear losses.
+macro_rules! membrane_energy {
+    ($t:ty, $name:literal) => {
+        impl $crate::energy::Energy for $t {
+            fn name(&self) -> &'static str {
+                $name
+            }
+            fn vertex_count(&self) -> usize {
+                self.frames.vertex_count()
+            }
+            fn value(&self, x: &[[f64; 3]]) -> Result<f64, $crate::error::SimError> {
+                $crate::membrane::membrane_value(&self.frames, self, x)
+            }
+            fn add_gradient(
+                &self,
+                x: &[[f64; 3]],
+                scale: f64,
+                grad: &mut [[f64; 3]],
+            ) -> Result<f64, $crate::error::SimError> {
+                $crate::membrane::membrane_gradient(&self.frames, self, x, scale, grad)
+            }
+            fn add_hessian(
+                &self,
+                x: &[[f64; 3]],
+                scale: f64,
+                kind: $crate::energy::HessianKind,
+                hess: &mut $crate::sparse::BlockCsr,
+            ) -> Result<(), $crate::error::SimError> {
+                $crate::membrane::membrane_hessian(&self.frames, self, x, scale, kind, hess)
+            }
+            fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
+                $crate::membrane::face_stencils(&self.frames, f)
+            }
+        }
+    };
+}
+pub(crate) use membrane_energy;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -14,7 +14,7 @@ use crate::error::{check_len, SimError};
 use crate::friction::Friction;
 use crate::gravity::Gravity;
 use crate::inertia::Inertia;
-use crate::multilevel_losses::{LinearCollision, UvShear, UvStretch};
+use crate::penalties::{LinearCollision, UvShear, UvStretch};
 use crate::sparse::{BlockCsr, PatternBuilder};
 use crate::stretch::Stretch;
 

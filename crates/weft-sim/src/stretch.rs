@@ -11,18 +11,13 @@
 //! Derivatives: `P = ∂ψ/∂F = F S` with the second Piola–Kirchhoff stress
 //! `S = 2μE + λ tr(E) I`; `dP = dF S + F dS`, `dS = 2μ dE + λ tr(dE) I`,
 //! `dE = ½(dFᵀF + FᵀdF)`. The exact Hessian is indefinite under compression (`E` with
-//! negative eigenvalues); [`HessianKind::Projected`] clamps each face's 9×9 block.
+//! negative eigenvalues); [`crate::HessianKind::Projected`] clamps each face's 9×9 block.
 
 use nalgebra::{Matrix2, Matrix3x2};
 use weft_mesh::TriMesh;
 
-use crate::energy::{Energy, HessianKind};
 use crate::error::{check_count, check_nonneg, SimError};
-use crate::membrane::{
-    face_stencils, membrane_gradient, membrane_hessian, membrane_value, FHessian, MembraneDensity,
-    RestFrames,
-};
-use crate::sparse::BlockCsr;
+use crate::membrane::{FHessian, MembraneDensity, RestFrames};
 
 /// Lamé parameters and thickness of one face.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -163,42 +158,13 @@ impl Stretch {
     }
 }
 
-impl Energy for Stretch {
-    fn name(&self) -> &'static str {
-        "stretching"
-    }
-    fn vertex_count(&self) -> usize {
-        self.frames.vertex_count()
-    }
-    fn value(&self, x: &[[f64; 3]]) -> Result<f64, SimError> {
-        membrane_value(&self.frames, self, x)
-    }
-    fn add_gradient(
-        &self,
-        x: &[[f64; 3]],
-        scale: f64,
-        grad: &mut [[f64; 3]],
-    ) -> Result<f64, SimError> {
-        membrane_gradient(&self.frames, self, x, scale, grad)
-    }
-    fn add_hessian(
-        &self,
-        x: &[[f64; 3]],
-        scale: f64,
-        kind: HessianKind,
-        hess: &mut BlockCsr,
-    ) -> Result<(), SimError> {
-        membrane_hessian(&self.frames, self, x, scale, kind, hess)
-    }
-    fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
-        face_stencils(&self.frames, f)
-    }
-}
+crate::membrane::membrane_energy!(Stretch, "stretching");
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::energy::hessian_of;
+    use crate::energy::{hessian_of, HessianKind};
+    use crate::sparse::BlockCsr;
     use crate::Bending;
     use weft_mesh::primitives::grid;
 

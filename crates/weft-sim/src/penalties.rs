@@ -1,21 +1,21 @@
-//! The unsupervised losses of the Multilevel system (seed 000 supplement §2, eq. 4–8),
-//! written as energies so they share the code path (and the finite-difference checks)
-//! of the physics terms.
+//! Physics penalties over a garment's positions that are not simulator energies but
+//! losses on a prediction (seed 000 supplement §2, eq. 4, 6–8), written as [`Energy`]s so
+//! they share the code path (and the finite-difference checks) of the simulator's terms:
 //!
 //! * eq. 4, collision: `k_c Σ_i |min(h(x_i) − ε, 0)|` = `k_c Σ_i max(ε − d_i, 0)` with the
 //!   signed distance `h` taken, as for the cubic penalty, along the contact normal:
 //!   [`LinearCollision`]. Its gradient is `−k_c n` below the threshold and its Hessian is
 //!   zero wherever it exists (the kink at `d = ε` has none).
-//! * eq. 5, gravity: `−k_g Σ_i m_i x_i·g` is [`crate::Gravity`] with weight `k_g`.
-//! * eq. 6, stretch: `k_s Σ_f a_f [(‖W^u_f‖ − 1)² + (‖W^v_f‖ − 1)²]`: [`UvStretch`].
-//! * eq. 7, shear: `k_h Σ_f a_f (W^u_f · W^v_f)²`: [`UvShear`].
+//! * eq. 5, gravity, is [`crate::Gravity`] itself.
+//! * eq. 6, UV stretch: `k_s Σ_f a_f [(‖W^u_f‖ − 1)² + (‖W^v_f‖ − 1)²]`: [`UvStretch`].
+//! * eq. 7, UV shear: `k_h Σ_f a_f (W^u_f · W^v_f)²`: [`UvShear`].
 //! * eq. 8: `(W^u W^v) = (Δx₁ Δx₂)(Δu₁ Δu₂; Δv₁ Δv₂)⁻¹`, which is the deformation gradient
 //!   `F` of a [`RestFrames`] built from UVs (`from_corner_uvs` / `from_vertex_uvs`); `a_f`
 //!   is the UV area. Without UVs, `from_rest_mesh` gives the same with the rest triangle
 //!   laid flat.
 //!
-//! The weights `k_*` are not inside the energies: they are the term weights of the
-//! [`crate::IncrementalPotential`] (defaults in [`MultilevelWeights::paper`]).
+//! The weights `k_*` are not inside the energies: they are term weights, chosen by whoever
+//! sums the terms (the trainer's loss weights, or an [`crate::IncrementalPotential`]).
 //!
 //! Eq. 6 is the Baraff–Witkin stretch condition squared: its exact Hessian,
 //! `2a[ŵŵᵀ + (1 − 1/‖w‖)(I − ŵŵᵀ)]` per column, is indefinite when a direction is
@@ -27,39 +27,8 @@ use crate::contact::{validate_contacts, VertexContact};
 use crate::energy::{Energy, HessianKind};
 use crate::error::{check_len, check_nonneg, SimError};
 use crate::math::axpy3;
-use crate::membrane::{
-    face_stencils, membrane_gradient, membrane_hessian, membrane_value, FHessian, MembraneDensity,
-    RestFrames,
-};
+use crate::membrane::{FHessian, MembraneDensity, RestFrames};
 use crate::sparse::BlockCsr;
-
-/// The loss weights of seed 000 supplement §2.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MultilevelWeights {
-    /// Collision, eq. 4.
-    pub k_c: f64,
-    /// Gravity, eq. 5.
-    pub k_g: f64,
-    /// Stretch, eq. 6.
-    pub k_s: f64,
-    /// Shear, eq. 7.
-    pub k_h: f64,
-    /// The collision threshold ε of eq. 4, m (the paper gives no value; HOOD's 2 mm).
-    pub eps: f64,
-}
-
-impl MultilevelWeights {
-    /// `k_c = 1.5`, `k_g = 0.1`, `k_s = 5`, `k_h = 2` as printed in the supplement.
-    pub fn paper() -> Self {
-        MultilevelWeights {
-            k_c: 1.5,
-            k_g: 0.1,
-            k_s: 5.0,
-            k_h: 2.0,
-            eps: crate::collision::HOOD_COLLISION_EPS,
-        }
-    }
-}
 
 /// Seed 000 eq. 4: the linear (hinge) collision loss `Σ max(ε − d, 0)`.
 #[derive(Clone, Debug)]
@@ -93,7 +62,7 @@ impl LinearCollision {
 
 impl Energy for LinearCollision {
     fn name(&self) -> &'static str {
-        "multilevel collision"
+        "linear collision"
     }
     fn vertex_count(&self) -> usize {
         self.vertex_count
@@ -229,41 +198,5 @@ impl MembraneDensity for UvShear {
     }
 }
 
-macro_rules! membrane_energy {
-    ($t:ty, $name:literal) => {
-        impl Energy for $t {
-            fn name(&self) -> &'static str {
-                $name
-            }
-            fn vertex_count(&self) -> usize {
-                self.frames.vertex_count()
-            }
-            fn value(&self, x: &[[f64; 3]]) -> Result<f64, SimError> {
-                membrane_value(&self.frames, self, x)
-            }
-            fn add_gradient(
-                &self,
-                x: &[[f64; 3]],
-                scale: f64,
-                grad: &mut [[f64; 3]],
-            ) -> Result<f64, SimError> {
-                membrane_gradient(&self.frames, self, x, scale, grad)
-            }
-            fn add_hessian(
-                &self,
-                x: &[[f64; 3]],
-                scale: f64,
-                kind: HessianKind,
-                hess: &mut BlockCsr,
-            ) -> Result<(), SimError> {
-                membrane_hessian(&self.frames, self, x, scale, kind, hess)
-            }
-            fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
-                face_stencils(&self.frames, f)
-            }
-        }
-    };
-}
-
-membrane_energy!(UvStretch, "multilevel stretch");
-membrane_energy!(UvShear, "multilevel shear");
+crate::membrane::membrane_energy!(UvStretch, "uv stretch");
+crate::membrane::membrane_energy!(UvShear, "uv shear");
