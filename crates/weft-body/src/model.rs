@@ -238,6 +238,16 @@ impl BodyModel {
         Self::from_npz(npz, &path.display().to_string())
     }
 
+    /// Reads the SMPL-format `.npz` at `path`, or weft's built-in default body when
+    /// `None`: the one place a `--body` option or a config's `body` key becomes a model.
+    /// Errors name the file (or the default body).
+    pub fn load_or_default(path: Option<&Path>) -> Result<Self, BodyError> {
+        match path {
+            Some(path) => Self::load(path),
+            None => crate::default_body(),
+        }
+    }
+
     /// Reads a model from `.npz` bytes; `name` names it in errors.
     pub fn from_npz_bytes(bytes: Vec<u8>, name: &str) -> Result<Self, BodyError> {
         let npz = Npz::from_bytes(bytes, Path::new(name))?;
@@ -371,7 +381,7 @@ impl BodyModel {
 
     /// Writes the model as `.npz` (see [`Self::to_npz`]) atomically.
     pub fn save(&self, path: &Path) -> Result<(), BodyError> {
-        let w = self.to_npz().map_err(|source| NpzError::Io {
+        let w = self.to_npz().map_err(|source| NpzError::Write {
             path: path.to_path_buf(),
             source,
         })?;
@@ -461,7 +471,7 @@ impl BodyModel {
 
     /// `T + B_s(β)`: rest vertices of shape `betas` (fewer than B are padded with zeros).
     pub fn shape_vertices(&self, betas: &[f64]) -> Result<Vec<[f64; 3]>, BodyError> {
-        let betas = self.padded_betas(betas)?;
+        let betas = self.betas(betas)?;
         let b = self.num_betas;
         Ok(self
             .v_template
@@ -479,7 +489,10 @@ impl BodyModel {
             .collect())
     }
 
-    fn padded_betas(&self, betas: &[f64]) -> Result<Vec<f64>, BodyError> {
+    /// The shape vector of this model for the coefficients `betas` given: padded with
+    /// zeros to [`num_betas`](Self::num_betas). Refuses more coefficients than the model
+    /// has (naming the count and the limit) and non-finite ones.
+    pub fn betas(&self, betas: &[f64]) -> Result<Vec<f64>, BodyError> {
         if betas.len() > self.num_betas {
             return Err(BodyError::Betas {
                 source_name: self.source.clone(),
@@ -520,7 +533,7 @@ impl BodyModel {
 
     /// The body of shape `betas`, ready to pose.
     pub fn shaped(&self, betas: &[f64]) -> Result<ShapedBody, BodyError> {
-        let padded = self.padded_betas(betas)?;
+        let padded = self.betas(betas)?;
         let vertices = self.shape_vertices(&padded)?;
         let joints = self.regress_joints(&vertices);
         Ok(ShapedBody {
@@ -855,6 +868,50 @@ pub(crate) mod tests {
             "toy: 3 shape coefficients (betas) given but the model has 2; expected at most 2"
         );
         assert!(m.joints(&[f64::NAN]).is_err());
+    }
+
+    #[test]
+    fn betas_are_padded_and_too_many_are_refused() {
+        let m = toy();
+        assert_eq!(m.betas(&[]).unwrap(), [0.0, 0.0]);
+        assert_eq!(m.betas(&[-1.5]).unwrap(), [-1.5, 0.0]);
+        assert_eq!(m.betas(&[0.5, 2.0]).unwrap(), [0.5, 2.0]);
+        let e = m.betas(&[1.0, 2.0, 3.0]).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                BodyError::Betas {
+                    given: 3,
+                    available: 2,
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        assert!(e.to_string().contains("at most 2"), "{e}");
+        assert!(matches!(
+            m.betas(&[f64::INFINITY]),
+            Err(BodyError::NonFinite { index: 0, .. })
+        ));
+    }
+
+    #[test]
+    fn load_or_default_reads_the_file_or_the_default_body() {
+        let d =
+            std::env::temp_dir().join(format!("weft-body-load-or-default-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let path = d.join("toy.npz");
+        toy().save(&path).unwrap();
+        let m = BodyModel::load_or_default(Some(&path)).unwrap();
+        assert_eq!((m.num_betas(), m.joint_count()), (2, 3));
+        assert_eq!(m.source(), path.display().to_string());
+        let m = BodyModel::load_or_default(None).unwrap();
+        assert_eq!(m.source(), crate::default_body::DEFAULT_BODY_NAME);
+        assert_eq!(m.num_betas(), 10);
+        let missing = d.join("missing.npz");
+        let e = BodyModel::load_or_default(Some(&missing)).unwrap_err();
+        assert!(e.to_string().contains("missing.npz"), "{e}");
+        let _ = std::fs::remove_dir_all(&d);
     }
 
     #[test]

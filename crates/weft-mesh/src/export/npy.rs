@@ -17,19 +17,19 @@
 //! arrays, unknown dtypes, extra header keys, and a data section whose size does not match
 //! the shape (a truncated download fails here, not as a wrong animation later).
 //!
-//! Supported element types ([`Element`]): `<f4`, `<f8`, `<i4`, `<i8`, `<u4`, `|u1`.
+//! Supported element types: `<f4`, `<f8`, `<i4`, `<i8`, `<u4`, `|u1` (see [`NpyData`]).
+//! The format itself (header, dtypes, memory bounds) lives in [`crate::io::npy`], shared
+//! with the `.npz` reader.
 
-use std::fmt::{self, Write as _};
-use std::io::{self, Write};
+use std::fs::File;
+use std::io::{self, BufReader, Write};
 use std::path::{Path, PathBuf};
 
+pub(crate) use crate::io::npy::ShapeDisplay;
+pub use crate::io::npy::{npy_header, Element};
+
+use crate::io::npy::{self, Dtype, Header, ReadError};
 use crate::io::write_atomic;
-
-/// The first six bytes of every `.npy` file.
-const MAGIC: &[u8; 6] = b"\x93NUMPY";
-
-/// The data section starts at a multiple of this (NumPy aligns to 64 bytes since 1.14).
-const ALIGN: usize = 64;
 
 /// What went wrong reading or writing a `.npy` file.
 #[derive(Debug, thiserror::Error)]
@@ -73,54 +73,6 @@ pub enum NpyError {
         found: usize,
     },
 }
-
-mod sealed {
-    pub trait Sealed {}
-}
-
-/// An element type weft reads and writes in `.npy` files, always little-endian.
-pub trait Element: Copy + sealed::Sealed {
-    /// The NumPy `descr` string, e.g. `<f4`.
-    const DESCR: &'static str;
-    /// Bytes per element.
-    const SIZE: usize;
-    /// Appends the little-endian bytes of `self`.
-    fn put(self, out: &mut Vec<u8>);
-    /// Reads one element from exactly [`Self::SIZE`] little-endian bytes.
-    fn get(bytes: &[u8]) -> Self;
-    /// Wraps a vector of this type.
-    fn wrap(data: Vec<Self>) -> NpyData;
-}
-
-macro_rules! element {
-    ($t:ty, $descr:literal, $variant:ident) => {
-        impl sealed::Sealed for $t {}
-        impl Element for $t {
-            const DESCR: &'static str = $descr;
-            const SIZE: usize = std::mem::size_of::<$t>();
-            #[inline]
-            fn put(self, out: &mut Vec<u8>) {
-                out.extend_from_slice(&self.to_le_bytes());
-            }
-            #[inline]
-            fn get(bytes: &[u8]) -> Self {
-                let mut b = [0u8; std::mem::size_of::<$t>()];
-                b.copy_from_slice(bytes);
-                <$t>::from_le_bytes(b)
-            }
-            fn wrap(data: Vec<Self>) -> NpyData {
-                NpyData::$variant(data)
-            }
-        }
-    };
-}
-
-element!(f32, "<f4", F32);
-element!(f64, "<f8", F64);
-element!(i32, "<i4", I32);
-element!(i64, "<i8", I64);
-element!(u32, "<u4", U32);
-element!(u8, "|u1", U8);
 
 /// The elements of an array, by type.
 #[derive(Clone, Debug, PartialEq)]
@@ -179,98 +131,93 @@ pub struct NpyArray {
     pub data: NpyData,
 }
 
-/// Reads a `.npy` file; see [`parse_npy`].
+/// Reads a `.npy` file; see [`parse_npy`]. Memory is bounded by the file: a header
+/// whose shape needs more bytes than the file holds is refused before anything is
+/// allocated for it, and a stream (a pipe, a device) is read no further than the shape.
 pub fn read_npy(path: &Path) -> Result<NpyArray, NpyError> {
-    let bytes = std::fs::read(path).map_err(|error| NpyError::Read {
+    let read_err = |error| NpyError::Read {
         path: path.to_path_buf(),
         error,
-    })?;
-    parse_npy(&bytes, path)
+    };
+    let file = File::open(path).map_err(read_err)?;
+    let meta = file.metadata().map_err(read_err)?;
+    let len = meta.is_file().then_some(meta.len());
+    let mut r = BufReader::new(file);
+    let checked = |e: ReadError| match e {
+        ReadError::Io(error) => read_err(error),
+        ReadError::Invalid(message) => invalid(path, message),
+    };
+    let header = npy::read_header(&mut r, len).map_err(checked)?;
+    let dtype = supported(&header).map_err(|m| invalid(path, m))?;
+    let data = npy::read_data(&mut r, &header, len.is_some()).map_err(checked)?;
+    Ok(NpyArray {
+        data: decode(dtype, &data),
+        shape: header.shape,
+    })
 }
 
 /// Parses a `.npy` file held in memory; `path` only names the file in errors.
 ///
-/// Accepts format versions 1.0, 2.0 and 3.0, C order, the element types of [`Element`],
+/// Accepts format versions 1.0, 2.0 and 3.0, C order, the element types of [`NpyData`],
 /// and exactly the keys `descr`, `fortran_order` and `shape`. The data section must hold
 /// exactly the bytes the shape needs.
 pub fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyArray, NpyError> {
-    let invalid = |message: String| NpyError::Invalid {
-        path: path.to_path_buf(),
-        message,
-    };
-    if bytes.len() < 10 || &bytes[..6] != MAGIC {
-        return Err(invalid(
-            "not a .npy file (it does not start with \\x93NUMPY); expected an array saved by numpy.save".into(),
-        ));
-    }
-    let (major, minor) = (bytes[6], bytes[7]);
-    let (header_len, start): (usize, usize) = match major {
-        1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
-        2 | 3 if bytes.len() >= 12 => (
-            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
-            12,
-        ),
-        _ => {
-            return Err(invalid(format!(
-                ".npy format version {major}.{minor}; expected 1.0, 2.0 or 3.0"
-            )))
-        }
-    };
-    let data_start = start
-        .checked_add(header_len)
-        .filter(|&end| end <= bytes.len())
-        .ok_or_else(|| {
-            invalid(format!(
-                "the header claims {header_len} bytes but the file has only {} after the preamble; the file is truncated",
-                bytes.len() - start
-            ))
-        })?;
-    let header = std::str::from_utf8(&bytes[start..data_start])
-        .map_err(|_| invalid("the header is not text; expected a Python dict literal".into()))?;
-    let header = parse_header(header).map_err(|m| invalid(format!("header: {m}")))?;
-    let data = &bytes[data_start..];
-
-    let count = header
-        .shape
-        .iter()
-        .try_fold(1usize, |acc, &d| acc.checked_mul(d))
-        .ok_or_else(|| {
-            invalid(format!(
-                "shape {} is too large",
-                ShapeDisplay(&header.shape)
-            ))
-        })?;
-    let dtype = Dtype::from_descr(&header.descr).map_err(invalid)?;
-    let needed = count.checked_mul(dtype.size()).ok_or_else(|| {
-        invalid(format!(
-            "shape {} is too large",
-            ShapeDisplay(&header.shape)
-        ))
+    let mut r = bytes;
+    let header = npy::read_header(&mut r, Some(bytes.len() as u64)).map_err(|e| match e {
+        ReadError::Invalid(message) => invalid(path, message),
+        // Reading a slice fails only by ending, which `read_header` reports as invalid.
+        ReadError::Io(error) => NpyError::Read {
+            path: path.to_path_buf(),
+            error,
+        },
     })?;
-    if data.len() != needed {
-        return Err(invalid(format!(
-            "the data section has {} bytes but shape {} of '{}' needs {needed}; the file is truncated or not what its header says",
-            data.len(),
-            ShapeDisplay(&header.shape),
-            header.descr
-        )));
-    }
-    let data = match dtype {
-        Dtype::F32 => decode::<f32>(data),
-        Dtype::F64 => decode::<f64>(data),
-        Dtype::I32 => decode::<i32>(data),
-        Dtype::I64 => decode::<i64>(data),
-        Dtype::U32 => decode::<u32>(data),
-        Dtype::U8 => decode::<u8>(data),
-    };
+    let dtype = supported(&header).map_err(|m| invalid(path, m))?;
+    // `read_header` checked that exactly the data section is left.
     Ok(NpyArray {
+        data: decode(dtype, r),
         shape: header.shape,
-        data,
     })
 }
 
-fn decode<T: Element>(data: &[u8]) -> NpyData {
-    T::wrap(data.chunks_exact(T::SIZE).map(T::get).collect())
+fn invalid(path: &Path, message: String) -> NpyError {
+    NpyError::Invalid {
+        path: path.to_path_buf(),
+        message,
+    }
+}
+
+/// The header's dtype if [`NpyData`] holds it and the order is C; the refusal otherwise.
+fn supported(header: &Header) -> Result<Dtype, String> {
+    if header.fortran_order {
+        return Err(
+            "fortran_order is True; expected a C-order array (in NumPy: np.ascontiguousarray(a))"
+                .into(),
+        );
+    }
+    match header.dtype {
+        d @ (Dtype::F4 | Dtype::F8 | Dtype::I4 | Dtype::I8 | Dtype::U4 | Dtype::U1) => Ok(d),
+        _ => Err(format!(
+            "dtype '{}' is not supported; expected one of '<f4', '<f8', '<i4', '<i8', '<u4', '|u1'",
+            header.descr
+        )),
+    }
+}
+
+/// The elements of `data` (exactly a whole number of them), as the variant of `dtype`.
+fn decode(dtype: Dtype, data: &[u8]) -> NpyData {
+    fn each<T, const N: usize>(data: &[u8], f: fn([u8; N]) -> T) -> Vec<T> {
+        data.chunks_exact(N)
+            .map(|c| f(c.try_into().expect("chunks of N bytes")))
+            .collect()
+    }
+    match dtype {
+        Dtype::F4 => NpyData::F32(each(data, f32::from_le_bytes)),
+        Dtype::F8 => NpyData::F64(each(data, f64::from_le_bytes)),
+        Dtype::I4 => NpyData::I32(each(data, i32::from_le_bytes)),
+        Dtype::I8 => NpyData::I64(each(data, i64::from_le_bytes)),
+        Dtype::U4 => NpyData::U32(each(data, u32::from_le_bytes)),
+        _ => NpyData::U8(data.to_vec()),
+    }
 }
 
 /// Writes `data` with `shape` as a version 1.0 (2.0 for huge headers) `.npy` file,
@@ -308,7 +255,7 @@ pub fn write_npy_to<T: Element>(w: &mut dyn Write, shape: &[usize], data: &[T]) 
     w.write_all(&npy_header(T::DESCR, shape))?;
     // Encode in blocks: one allocation, few write calls, no per-element syscalls.
     const BLOCK: usize = 1 << 14;
-    let mut buf = Vec::with_capacity(BLOCK * T::SIZE);
+    let mut buf = Vec::with_capacity(BLOCK * std::mem::size_of::<T>());
     for chunk in data.chunks(BLOCK) {
         buf.clear();
         for &x in chunk {
@@ -319,280 +266,10 @@ pub fn write_npy_to<T: Element>(w: &mut dyn Write, shape: &[usize], data: &[T]) 
     Ok(())
 }
 
-/// The preamble and header of a `.npy` file of `descr` and `shape`, padded with spaces
-/// and a final newline so the data starts at a multiple of 64 bytes (as NumPy writes).
-pub fn npy_header(descr: &str, shape: &[usize]) -> Vec<u8> {
-    let mut dict = format!(
-        "{{'descr': '{descr}', 'fortran_order': False, 'shape': {}, }}",
-        ShapeDisplay(shape)
-    );
-    // Version 1.0 stores the header length in a u16; longer headers need 2.0.
-    let (version, preamble) = if dict.len() + 1 + 10 + ALIGN <= usize::from(u16::MAX) {
-        (1u8, 10)
-    } else {
-        (2u8, 12)
-    };
-    let total = (preamble + dict.len() + 1).div_ceil(ALIGN) * ALIGN;
-    while preamble + dict.len() + 1 < total {
-        dict.push(' ');
-    }
-    dict.push('\n');
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&[version, 0]);
-    if version == 1 {
-        // Bounded by the check above.
-        out.extend_from_slice(&(dict.len() as u16).to_le_bytes());
-    } else {
-        out.extend_from_slice(&(dict.len() as u32).to_le_bytes());
-    }
-    out.extend_from_slice(dict.as_bytes());
-    out
-}
-
-/// The element types [`parse_npy`] accepts.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Dtype {
-    F32,
-    F64,
-    I32,
-    I64,
-    U32,
-    U8,
-}
-
-impl Dtype {
-    fn from_descr(descr: &str) -> Result<Self, String> {
-        Ok(match descr {
-            "<f4" => Dtype::F32,
-            "<f8" => Dtype::F64,
-            "<i4" => Dtype::I32,
-            "<i8" => Dtype::I64,
-            "<u4" => Dtype::U32,
-            "|u1" | "<u1" => Dtype::U8,
-            d if d.starts_with('>') => {
-                return Err(format!(
-                    "dtype '{d}' is big-endian; expected little-endian data (in NumPy: a.astype(a.dtype.newbyteorder('<')))"
-                ))
-            }
-            d => {
-                return Err(format!(
-                    "dtype '{d}' is not supported; expected one of '<f4', '<f8', '<i4', '<i8', '<u4', '|u1'"
-                ))
-            }
-        })
-    }
-
-    fn size(self) -> usize {
-        match self {
-            Dtype::F32 | Dtype::I32 | Dtype::U32 => 4,
-            Dtype::F64 | Dtype::I64 => 8,
-            Dtype::U8 => 1,
-        }
-    }
-}
-
-/// The three keys of a `.npy` header.
-#[derive(Debug, PartialEq)]
-struct Header {
-    descr: String,
-    shape: Vec<usize>,
-}
-
-/// Parses the header dict: `{'descr': STR, 'fortran_order': BOOL, 'shape': TUPLE}` in
-/// any order, with optional trailing comma and surrounding whitespace.
-fn parse_header(text: &str) -> Result<Header, String> {
-    let mut p = Parser {
-        s: text.as_bytes(),
-        i: 0,
-    };
-    let mut descr = None;
-    let mut fortran = None;
-    let mut shape = None;
-    p.expect(b'{')?;
-    loop {
-        p.ws();
-        if p.eat(b'}') {
-            break;
-        }
-        let key = p.string()?;
-        p.ws();
-        p.expect(b':')?;
-        p.ws();
-        let duplicate = match key.as_str() {
-            "descr" => descr.replace(p.string()?).is_some(),
-            "fortran_order" => fortran.replace(p.boolean()?).is_some(),
-            "shape" => shape.replace(p.tuple()?).is_some(),
-            other => {
-                return Err(format!(
-                    "unknown key '{other}'; expected only 'descr', 'fortran_order' and 'shape'"
-                ))
-            }
-        };
-        if duplicate {
-            return Err(format!("key '{key}' appears twice"));
-        }
-        p.ws();
-        if !p.eat(b',') {
-            p.ws();
-            p.expect(b'}')?;
-            break;
-        }
-    }
-    if let Some(rest) = text.get(p.i..) {
-        if !rest.trim().is_empty() {
-            return Err(format!(
-                "unexpected text after the dict: `{}`",
-                rest.trim().chars().take(20).collect::<String>()
-            ));
-        }
-    }
-    let missing = |k: &str| format!("key '{k}' is missing");
-    let descr = descr.ok_or_else(|| missing("descr"))?;
-    if fortran.ok_or_else(|| missing("fortran_order"))? {
-        return Err(
-            "fortran_order is True; expected a C-order array (in NumPy: np.ascontiguousarray(a))"
-                .into(),
-        );
-    }
-    let shape = shape.ok_or_else(|| missing("shape"))?;
-    Ok(Header { descr, shape })
-}
-
-/// A cursor over the header bytes.
-struct Parser<'a> {
-    s: &'a [u8],
-    i: usize,
-}
-
-impl Parser<'_> {
-    fn peek(&self) -> Option<u8> {
-        self.s.get(self.i).copied()
-    }
-
-    fn ws(&mut self) {
-        while matches!(self.peek(), Some(b' ' | b'\t' | b'\n' | b'\r')) {
-            self.i += 1;
-        }
-    }
-
-    fn eat(&mut self, c: u8) -> bool {
-        if self.peek() == Some(c) {
-            self.i += 1;
-            true
-        } else {
-            false
-        }
-    }
-
-    fn found(&self) -> String {
-        match self.peek() {
-            Some(c) => format!("`{}` at byte {}", c as char, self.i),
-            None => "the end of the header".into(),
-        }
-    }
-
-    fn expect(&mut self, c: u8) -> Result<(), String> {
-        if self.eat(c) {
-            Ok(())
-        } else {
-            Err(format!("expected `{}`, found {}", c as char, self.found()))
-        }
-    }
-
-    /// A quoted string without escapes (`'...'` or `"..."`).
-    fn string(&mut self) -> Result<String, String> {
-        let quote = match self.peek() {
-            Some(q @ (b'\'' | b'"')) => q,
-            _ => return Err(format!("expected a quoted string, found {}", self.found())),
-        };
-        self.i += 1;
-        let start = self.i;
-        while let Some(c) = self.peek() {
-            if c == quote {
-                let s = String::from_utf8_lossy(&self.s[start..self.i]).into_owned();
-                self.i += 1;
-                return Ok(s);
-            }
-            if c == b'\\' {
-                return Err("escape sequences in header strings are not supported".into());
-            }
-            self.i += 1;
-        }
-        Err("unterminated string".into())
-    }
-
-    fn boolean(&mut self) -> Result<bool, String> {
-        for (word, value) in [("True", true), ("False", false)] {
-            if self.s[self.i..].starts_with(word.as_bytes()) {
-                self.i += word.len();
-                return Ok(value);
-            }
-        }
-        Err(format!("expected True or False, found {}", self.found()))
-    }
-
-    /// `()`, `(n,)`, `(n, m)`, … of non-negative integers (a Python 2 `L` suffix allowed).
-    fn tuple(&mut self) -> Result<Vec<usize>, String> {
-        self.expect(b'(')?;
-        let mut dims = Vec::new();
-        loop {
-            self.ws();
-            if self.eat(b')') {
-                break;
-            }
-            let start = self.i;
-            while matches!(self.peek(), Some(b'0'..=b'9')) {
-                self.i += 1;
-            }
-            if start == self.i {
-                return Err(format!(
-                    "expected a non-negative integer in the shape, found {}",
-                    self.found()
-                ));
-            }
-            let digits = std::str::from_utf8(&self.s[start..self.i]).unwrap_or("");
-            let d: usize = digits
-                .parse()
-                .map_err(|_| format!("shape entry {digits} is too large"))?;
-            dims.push(d);
-            self.eat(b'L');
-            self.ws();
-            if !self.eat(b',') {
-                self.ws();
-                self.expect(b')')?;
-                break;
-            }
-        }
-        // Python writes a 1-tuple as `(n,)`; `(n)` is an int, not a shape, but accepting
-        // it costs nothing and reads what the user meant.
-        Ok(dims)
-    }
-}
-
-/// Formats a shape the way Python writes a tuple: `()`, `(5,)`, `(2, 3)`.
-pub(crate) struct ShapeDisplay<'a>(pub &'a [usize]);
-
-impl fmt::Display for ShapeDisplay<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let mut s = String::from("(");
-        for (k, d) in self.0.iter().enumerate() {
-            if k > 0 {
-                s.push_str(", ");
-            }
-            let _ = write!(s, "{d}");
-        }
-        if self.0.len() == 1 {
-            s.push(',');
-        }
-        s.push(')');
-        f.write_str(&s)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::npy::MAGIC;
     use proptest::prelude::*;
 
     fn parse(bytes: &[u8]) -> Result<NpyArray, NpyError> {
@@ -705,7 +382,7 @@ mod tests {
             "{'descr': '<f4', 'fortran_order': False, 'shape': (3,)}",
             &d
         ))
-        .contains("the data section has 8 bytes but shape (3,) of '<f4' needs 12"));
+        .contains("the data has 8 bytes but shape (3,) of '<f4' needs 12"));
         assert!(err(&file("{'descr': '<f4', 'fortran_order': False}", &d))
             .contains("key 'shape' is missing"));
         assert!(err(&file(

@@ -24,26 +24,34 @@
 //! [`write_atomic`](super::write_atomic), so a crash never leaves a partial file; entries
 //! get a fixed timestamp so the same arrays give the same bytes.
 //!
-//! The `.npy` member parsing is private here. `crate::export::npy` (written at the same
-//! time) has a strict standalone `.npy` reader; the two can be merged once both have
-//! settled (that one refuses Fortran order, which `.npz` files from SMPL need).
+//! Members are parsed by the one `.npy` reader of [`super::npy`], streaming out of the
+//! archive: the array's header is read first and its shape checked against the member's
+//! size, and that size against what the member's compressed bytes can hold, before the
+//! data is read, so a small crafted archive that claims a huge array fails at once
+//! instead of allocating for the claim.
 
 use std::collections::BTreeMap;
 use std::fmt;
-use std::io::{self, Cursor, Read, Write};
+use std::fs::File;
+use std::io::{self, BufReader, Cursor, Read, Seek, Write};
 use std::path::{Path, PathBuf};
 
+use super::npy::{self, fortran_to_c, npy_header, Dtype, Element, ReadError, ShapeDisplay};
 use super::write_atomic;
 
 /// The largest member weft will inflate (bytes): far above any body model or motion, far
 /// below what would exhaust memory from a corrupt size field.
 pub const MAX_MEMBER_BYTES: u64 = 8 << 30;
 
+/// The most a deflated stream can expand (deflate's limit is about 1032:1): a member
+/// claiming more per compressed byte is damaged, and is refused before it is read.
+const MAX_DEFLATE_RATIO: u64 = 1032;
+
 /// What went wrong reading or writing a `.npz` file.
 #[derive(Debug, thiserror::Error)]
 pub enum NpzError {
-    /// The file could not be read or written.
-    #[error("{}: {source}", .path.display())]
+    /// The file could not be read.
+    #[error("cannot read {}", .path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -51,7 +59,27 @@ pub enum NpzError {
         #[source]
         source: io::Error,
     },
-    /// The file is not a readable zip archive, or a member is damaged.
+    /// The file could not be written (nothing is left behind).
+    #[error("cannot write {}", .path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's (or the zip writer's) error.
+        #[source]
+        source: io::Error,
+    },
+    /// The zip layer refused the archive or one of its members.
+    #[error("{}: {what}", .path.display())]
+    Zip {
+        /// The file.
+        path: PathBuf,
+        /// What was being read, and what was expected.
+        what: String,
+        /// The zip reader's error.
+        #[source]
+        source: zip::result::ZipError,
+    },
+    /// A member is damaged: it claims more bytes than the archive can hold.
     #[error("{}: {message}", .path.display())]
     Archive {
         /// The file.
@@ -92,7 +120,7 @@ pub enum NpzError {
         found: String,
     },
     /// The array has the wrong shape.
-    #[error("{}: `{key}` has shape {}; expected {}", .path.display(), Shape(.found), ShapePattern(.expected))]
+    #[error("{}: `{key}` has shape {}; expected {}", .path.display(), ShapeDisplay(.found), ShapePattern(.expected))]
     Shape {
         /// The file.
         path: PathBuf,
@@ -114,10 +142,17 @@ pub struct NpzArray<T> {
     pub data: Vec<T>,
 }
 
+/// What an archive is read from: a file or bytes in memory.
+trait Source: Read + Seek + Send + Sync {}
+impl<T: Read + Seek + Send + Sync> Source for T {}
+
 /// A `.npz` archive opened for reading. Members are inflated and parsed on request.
 pub struct Npz {
     path: PathBuf,
-    archive: zip::ZipArchive<Cursor<Vec<u8>>>,
+    archive: zip::ZipArchive<Box<dyn Source>>,
+    /// Bytes in the archive: no stored member is larger, no deflated one more than
+    /// [`MAX_DEFLATE_RATIO`] times larger.
+    len: u64,
     /// Array name (member name without `.npy`) → member name.
     members: BTreeMap<String, String>,
 }
@@ -132,22 +167,31 @@ impl fmt::Debug for Npz {
 }
 
 impl Npz {
-    /// Opens the `.npz` file at `path`.
+    /// Opens the `.npz` file at `path`. Members are read from the file when asked for, so
+    /// memory follows the arrays read, not the file (nor an endless device: a zip is found
+    /// from its end, which a stream does not have).
     pub fn open(path: &Path) -> Result<Self, NpzError> {
-        let bytes = std::fs::read(path).map_err(|source| NpzError::Io {
+        let io_err = |source| NpzError::Io {
             path: path.to_path_buf(),
             source,
-        })?;
-        Self::from_bytes(bytes, path)
+        };
+        let file = File::open(path).map_err(io_err)?;
+        let len = file.metadata().map_err(io_err)?.len();
+        Self::from_source(Box::new(BufReader::new(file)), len, path)
     }
 
     /// Reads an `.npz` held in memory; `path` only names it in errors.
     pub fn from_bytes(bytes: Vec<u8>, path: &Path) -> Result<Self, NpzError> {
-        let archive = zip::ZipArchive::new(Cursor::new(bytes)).map_err(|e| NpzError::Archive {
+        let len = bytes.len() as u64;
+        Self::from_source(Box::new(Cursor::new(bytes)), len, path)
+    }
+
+    fn from_source(source: Box<dyn Source>, len: u64, path: &Path) -> Result<Self, NpzError> {
+        let archive = zip::ZipArchive::new(source).map_err(|source| NpzError::Zip {
             path: path.to_path_buf(),
-            message: format!(
-                "not a readable .npz (zip) archive: {e}; expected a file written by numpy.savez"
-            ),
+            what: "not a readable .npz (zip) archive; expected a file written by numpy.savez"
+                .into(),
+            source,
         })?;
         let members = archive
             .file_names()
@@ -162,6 +206,7 @@ impl Npz {
         Ok(Npz {
             path: path.to_path_buf(),
             archive,
+            len,
             members,
         })
     }
@@ -181,8 +226,13 @@ impl Npz {
         self.members.contains_key(key)
     }
 
-    /// The raw member bytes of `key`.
-    fn member(&mut self, key: &str) -> Result<Vec<u8>, NpzError> {
+    /// Parses member `key` into its dtype, C-order shape and C-order element bytes.
+    ///
+    /// Checks, in order and before reading the data: the member's size against
+    /// [`MAX_MEMBER_BYTES`] and against what its compressed bytes (at most the archive)
+    /// can hold, then the array's shape against the member's size. The data is then read
+    /// as it inflates, so memory follows the bytes really present.
+    fn raw(&mut self, key: &str) -> Result<RawArray, NpzError> {
         let Some(name) = self.members.get(key).cloned() else {
             return Err(NpzError::Missing {
                 path: self.path.clone(),
@@ -190,49 +240,59 @@ impl Npz {
                 available: self.keys(),
             });
         };
-        let archive_err = |path: &Path, e: &dyn fmt::Display| NpzError::Archive {
-            path: path.to_path_buf(),
-            message: format!("member `{name}`: {e}"),
+        let path = self.path.clone();
+        let invalid = |message: String| NpzError::Invalid {
+            path: path.clone(),
+            key: key.into(),
+            message,
+        };
+        let member_err = |what: &str, source| NpzError::Zip {
+            path: path.clone(),
+            what: format!("member `{name}` {what}"),
+            source,
         };
         let mut file = self
             .archive
             .by_name(&name)
-            .map_err(|e| archive_err(&self.path, &e))?;
+            .map_err(|e| member_err("cannot be opened", e))?;
         let size = file.size();
         if size > MAX_MEMBER_BYTES {
-            return Err(NpzError::Invalid {
-                path: self.path.clone(),
-                key: key.into(),
+            return Err(invalid(format!(
+                "the member claims {size} bytes, more than the {MAX_MEMBER_BYTES} weft reads at once"
+            )));
+        }
+        let packed = file.compressed_size().min(self.len);
+        let most = match file.compression() {
+            zip::CompressionMethod::Stored => packed,
+            _ => packed.saturating_mul(MAX_DEFLATE_RATIO).saturating_add(64),
+        };
+        if size > most {
+            return Err(NpzError::Archive {
+                path: path.clone(),
                 message: format!(
-                    "the member claims {size} bytes, more than the {MAX_MEMBER_BYTES} weft reads at once"
+                    "member `{name}` claims {size} bytes but its {packed} stored bytes hold at most {most}; the file is damaged"
                 ),
             });
         }
-        let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
-        // Read one byte past the declared size so a lying header is caught, not trusted.
-        file.by_ref()
-            .take(size + 1)
-            .read_to_end(&mut bytes)
-            .map_err(|e| archive_err(&self.path, &e))?;
-        if bytes.len() as u64 != size {
-            return Err(archive_err(
-                &self.path,
-                &format!(
-                    "inflates to {} bytes but its header says {size}; the file is damaged",
-                    bytes.len()
-                ),
-            ));
-        }
-        Ok(bytes)
-    }
-
-    /// Parses member `key` into its dtype, shape and C-order bytes.
-    fn raw(&mut self, key: &str) -> Result<RawArray, NpzError> {
-        let bytes = self.member(key)?;
-        parse_npy(&bytes).map_err(|message| NpzError::Invalid {
-            path: self.path.clone(),
-            key: key.into(),
-            message,
+        let read_err = |e: ReadError| match e {
+            ReadError::Invalid(message) => invalid(message),
+            // Inflating failed: a damaged stream or a checksum mismatch.
+            ReadError::Io(source) => NpzError::Io {
+                path: path.clone(),
+                source,
+            },
+        };
+        let header = npy::read_header(&mut file, Some(size)).map_err(read_err)?;
+        let data = npy::read_data(&mut file, &header, false).map_err(read_err)?;
+        let bytes = if header.fortran_order && header.shape.len() > 1 {
+            fortran_to_c(&data, &header.shape, header.dtype.size())
+        } else {
+            data
+        };
+        Ok(RawArray {
+            dtype: header.dtype,
+            shape: header.shape,
+            bytes,
         })
     }
 
@@ -341,38 +401,6 @@ fn arr<const N: usize>(b: &[u8]) -> [u8; N] {
     out
 }
 
-/// An element type [`NpzWriter`] stores.
-pub trait NpzElement: Copy {
-    /// The NumPy `descr`.
-    const DESCR: &'static str;
-    /// Appends the little-endian bytes.
-    fn put(self, out: &mut Vec<u8>);
-}
-
-macro_rules! npz_element {
-    ($t:ty, $d:literal) => {
-        impl NpzElement for $t {
-            const DESCR: &'static str = $d;
-            fn put(self, out: &mut Vec<u8>) {
-                out.extend_from_slice(&self.to_le_bytes());
-            }
-        }
-    };
-}
-npz_element!(f32, "<f4");
-npz_element!(f64, "<f8");
-npz_element!(i32, "<i4");
-npz_element!(i64, "<i8");
-npz_element!(u32, "<u4");
-npz_element!(u8, "|u1");
-
-impl NpzElement for bool {
-    const DESCR: &'static str = "|b1";
-    fn put(self, out: &mut Vec<u8>) {
-        out.push(u8::from(self));
-    }
-}
-
 /// Builds an `.npz` in memory, then writes it atomically.
 ///
 /// ```
@@ -404,14 +432,14 @@ impl NpzWriter {
     /// Adds array `key` of `shape` (C order). Fails with
     /// [`io::ErrorKind::InvalidInput`] when `data` does not hold the elements `shape`
     /// describes, or when `key` was already added.
-    pub fn add<T: NpzElement>(&mut self, key: &str, shape: &[usize], data: &[T]) -> io::Result<()> {
+    pub fn add<T: Element>(&mut self, key: &str, shape: &[usize], data: &[T]) -> io::Result<()> {
         let expected = shape.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
         if expected != Some(data.len()) {
             return Err(io::Error::new(
                 io::ErrorKind::InvalidInput,
                 format!(
                     "`{key}`: shape {} does not hold {} elements",
-                    Shape(shape),
+                    ShapeDisplay(shape),
                     data.len()
                 ),
             ));
@@ -422,11 +450,8 @@ impl NpzWriter {
                 format!("`{key}` added twice"),
             ));
         }
-        let mut bytes = crate::export::npy::npy_header(T::DESCR, shape);
-        bytes.reserve(std::mem::size_of_val(data));
-        for &x in data {
-            x.put(&mut bytes);
-        }
+        let mut bytes = npy_header(T::DESCR, shape);
+        npy::put_all(&mut bytes, data);
         self.members.push((key.to_string(), bytes));
         Ok(())
     }
@@ -457,85 +482,12 @@ impl NpzWriter {
 
     /// Writes the archive to `path` atomically.
     pub fn write(&self, path: &Path) -> Result<(), NpzError> {
-        let io_err = |source| NpzError::Io {
+        let io_err = |source| NpzError::Write {
             path: path.to_path_buf(),
             source,
         };
         let bytes = self.to_bytes().map_err(io_err)?;
         write_atomic(path, |w| w.write_all(&bytes)).map_err(io_err)
-    }
-}
-
-/// Element types of `.npy` members weft reads.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Dtype {
-    F4,
-    F8,
-    I1,
-    I2,
-    I4,
-    I8,
-    U1,
-    U2,
-    U4,
-    U8,
-    B1,
-}
-
-impl Dtype {
-    fn parse(descr: &str) -> Result<Self, String> {
-        let (order, code) = descr.split_at(descr.len().min(1));
-        if order == ">" && !matches!(code, "i1" | "u1" | "b1") {
-            return Err(format!(
-                "dtype '{descr}' is big-endian; expected little-endian data (in NumPy: a.astype(a.dtype.newbyteorder('<')))"
-            ));
-        }
-        if !matches!(order, "<" | "|" | "=" | ">") {
-            return Err(format!("dtype '{descr}' is not a numeric dtype weft reads"));
-        }
-        Ok(match code {
-            "f4" => Dtype::F4,
-            "f8" => Dtype::F8,
-            "i1" => Dtype::I1,
-            "i2" => Dtype::I2,
-            "i4" => Dtype::I4,
-            "i8" => Dtype::I8,
-            "u1" => Dtype::U1,
-            "u2" => Dtype::U2,
-            "u4" => Dtype::U4,
-            "u8" => Dtype::U8,
-            "b1" => Dtype::B1,
-            _ => {
-                return Err(format!(
-                    "dtype '{descr}' is not supported; expected a float ('<f4', '<f8'), integer ('<i4', '<i8', '<u4', …) or bool ('|b1') array"
-                ))
-            }
-        })
-    }
-
-    fn size(self) -> usize {
-        match self {
-            Dtype::I1 | Dtype::U1 | Dtype::B1 => 1,
-            Dtype::I2 | Dtype::U2 => 2,
-            Dtype::F4 | Dtype::I4 | Dtype::U4 => 4,
-            Dtype::F8 | Dtype::I8 | Dtype::U8 => 8,
-        }
-    }
-
-    fn descr(self) -> &'static str {
-        match self {
-            Dtype::F4 => "<f4",
-            Dtype::F8 => "<f8",
-            Dtype::I1 => "|i1",
-            Dtype::I2 => "<i2",
-            Dtype::I4 => "<i4",
-            Dtype::I8 => "<i8",
-            Dtype::U1 => "|u1",
-            Dtype::U2 => "<u2",
-            Dtype::U4 => "<u4",
-            Dtype::U8 => "<u8",
-            Dtype::B1 => "|b1",
-        }
     }
 }
 
@@ -549,195 +501,6 @@ struct RawArray {
 impl RawArray {
     fn decode<T>(&self, f: impl Fn(&[u8]) -> T) -> Vec<T> {
         self.bytes.chunks_exact(self.dtype.size()).map(f).collect()
-    }
-}
-
-/// Parses a `.npy` member; Fortran-order data is transposed to C order.
-fn parse_npy(bytes: &[u8]) -> Result<RawArray, String> {
-    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
-        return Err(
-            "not a .npy array (no \\x93NUMPY magic); expected a numeric array saved by numpy.savez"
-                .into(),
-        );
-    }
-    let (major, minor) = (bytes[6], bytes[7]);
-    let (header_len, start): (usize, usize) = match major {
-        1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10),
-        2 | 3 if bytes.len() >= 12 => (
-            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
-            12,
-        ),
-        _ => {
-            return Err(format!(
-                ".npy format version {major}.{minor}; expected 1.0, 2.0 or 3.0"
-            ))
-        }
-    };
-    let data_start = start
-        .checked_add(header_len)
-        .filter(|&e| e <= bytes.len())
-        .ok_or("the .npy header is truncated")?;
-    let header = std::str::from_utf8(&bytes[start..data_start])
-        .map_err(|_| "the .npy header is not text".to_string())?;
-    let (descr, fortran, shape) = parse_header(header)?;
-    let dtype = Dtype::parse(&descr)?;
-    let count = shape
-        .iter()
-        .try_fold(1usize, |a, &d| a.checked_mul(d))
-        .ok_or_else(|| format!("shape {} is too large", Shape(&shape)))?;
-    let needed = count
-        .checked_mul(dtype.size())
-        .ok_or_else(|| format!("shape {} is too large", Shape(&shape)))?;
-    let data = &bytes[data_start..];
-    if data.len() != needed {
-        return Err(format!(
-            "the data has {} bytes but shape {} of '{descr}' needs {needed}; the array is truncated or not what its header says",
-            data.len(),
-            Shape(&shape)
-        ));
-    }
-    let bytes = if fortran && shape.len() > 1 {
-        fortran_to_c(data, &shape, dtype.size())
-    } else {
-        data.to_vec()
-    };
-    Ok(RawArray {
-        dtype,
-        shape,
-        bytes,
-    })
-}
-
-/// Reorders Fortran-order (first index fastest) element bytes into C order.
-fn fortran_to_c(data: &[u8], shape: &[usize], size: usize) -> Vec<u8> {
-    let count: usize = shape.iter().product();
-    // Fortran strides, in elements.
-    let mut fstride = vec![1usize; shape.len()];
-    for k in 1..shape.len() {
-        fstride[k] = fstride[k - 1] * shape[k - 1];
-    }
-    let mut out = Vec::with_capacity(data.len());
-    let mut index = vec![0usize; shape.len()];
-    for _ in 0..count {
-        let src: usize = index.iter().zip(&fstride).map(|(i, s)| i * s).sum();
-        out.extend_from_slice(&data[src * size..(src + 1) * size]);
-        // Advance the C-order multi-index (last index fastest).
-        for k in (0..shape.len()).rev() {
-            index[k] += 1;
-            if index[k] < shape[k] {
-                break;
-            }
-            index[k] = 0;
-        }
-    }
-    out
-}
-
-/// Parses `{'descr': STR, 'fortran_order': BOOL, 'shape': TUPLE}` (any key order,
-/// trailing comma allowed) into (descr, fortran_order, shape).
-fn parse_header(text: &str) -> Result<(String, bool, Vec<usize>), String> {
-    let text = text.trim();
-    let inner = text
-        .strip_prefix('{')
-        .and_then(|t| t.strip_suffix('}'))
-        .ok_or_else(|| format!("the .npy header `{}` is not a dict", short(text)))?;
-    let mut descr = None;
-    let mut fortran = None;
-    let mut shape = None;
-    let mut rest = inner.trim_start();
-    while !rest.is_empty() {
-        let (key, after) = quoted(rest)?;
-        let after = after
-            .trim_start()
-            .strip_prefix(':')
-            .ok_or_else(|| format!("expected `:` after '{key}' in the .npy header"))?
-            .trim_start();
-        rest =
-            match key.as_str() {
-                "descr" => {
-                    let (v, a) = quoted(after)?;
-                    descr = Some(v);
-                    a
-                }
-                "fortran_order" => {
-                    if let Some(a) = after.strip_prefix("True") {
-                        fortran = Some(true);
-                        a
-                    } else if let Some(a) = after.strip_prefix("False") {
-                        fortran = Some(false);
-                        a
-                    } else {
-                        return Err("fortran_order is neither True nor False".into());
-                    }
-                }
-                "shape" => {
-                    let a = after
-                        .strip_prefix('(')
-                        .ok_or("the shape in the .npy header is not a tuple")?;
-                    let close = a.find(')').ok_or("the shape tuple is not closed")?;
-                    let mut dims = Vec::new();
-                    for part in a[..close].split(',') {
-                        let p = part.trim().trim_end_matches('L');
-                        if p.is_empty() {
-                            continue;
-                        }
-                        dims.push(p.parse::<usize>().map_err(|_| {
-                            format!("shape entry `{p}` is not a non-negative integer")
-                        })?);
-                    }
-                    shape = Some(dims);
-                    &a[close + 1..]
-                }
-                other => return Err(format!("unexpected key '{other}' in the .npy header")),
-            };
-        rest = rest.trim_start();
-        rest = rest.strip_prefix(',').unwrap_or(rest).trim_start();
-    }
-    match (descr, fortran, shape) {
-        (Some(d), Some(f), Some(s)) => Ok((d, f, s)),
-        _ => Err(format!(
-            "the .npy header `{}` lacks one of 'descr', 'fortran_order', 'shape'",
-            short(text)
-        )),
-    }
-}
-
-/// A `'...'` or `"..."` string at the start of `s`, and what follows it.
-fn quoted(s: &str) -> Result<(String, &str), String> {
-    let q = s
-        .chars()
-        .next()
-        .filter(|c| *c == '\'' || *c == '"')
-        .ok_or_else(|| format!("expected a quoted key in the .npy header at `{}`", short(s)))?;
-    let body = &s[1..];
-    let end = body
-        .find(q)
-        .ok_or("unterminated string in the .npy header")?;
-    Ok((body[..end].to_string(), &body[end + 1..]))
-}
-
-fn short(s: &str) -> String {
-    s.chars().take(60).collect()
-}
-
-/// Displays a shape as NumPy does: `(3,)`, `(2, 4)`, `()`.
-struct Shape<'a>(&'a [usize]);
-
-impl fmt::Display for Shape<'_> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.0 {
-            [n] => write!(f, "({n},)"),
-            s => {
-                f.write_str("(")?;
-                for (i, d) in s.iter().enumerate() {
-                    if i > 0 {
-                        f.write_str(", ")?;
-                    }
-                    write!(f, "{d}")?;
-                }
-                f.write_str(")")
-            }
-        }
     }
 }
 
@@ -917,6 +680,63 @@ mod tests {
             .floats("s", &[])
             .unwrap_err();
         assert!(e.to_string().contains("'<U3' is not supported"), "{e}");
+    }
+
+    /// Issue 17 item 7: a small archive whose zip headers claim a huge member, or whose
+    /// array header claims a huge array, fails at once without allocating for the claim.
+    #[test]
+    fn huge_claims_in_a_small_archive_fail_fast() {
+        let member = npy_bytes("<f8", false, "(4,)", &[0u8; 32]);
+        let mut bytes = zip_of(&[("a.npy", member.clone())]);
+        // Patch the uncompressed size in the local (offset 22) and central (offset 24)
+        // headers to 3.75 GiB.
+        let claim = 0xF000_0000u32.to_le_bytes();
+        let local = bytes.windows(4).position(|w| w == b"PK\x03\x04").unwrap();
+        bytes[local + 22..local + 26].copy_from_slice(&claim);
+        let central = bytes.windows(4).position(|w| w == b"PK\x01\x02").unwrap();
+        bytes[central + 24..central + 28].copy_from_slice(&claim);
+        let start = std::time::Instant::now();
+        let e = Npz::from_bytes(bytes, Path::new("z.npz"))
+            .unwrap()
+            .floats("a", &[None])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("z.npz: member `a.npy` claims 4026531840 bytes but its"),
+            "{e}"
+        );
+        assert!(e.contains("the file is damaged"), "{e}");
+
+        // A deflated member whose array header claims 2^40 doubles over 4 of data.
+        let claim = npy_bytes("<f8", false, "(1099511627776,)", &[0u8; 32]);
+        let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
+        let deflate = zip::write::SimpleFileOptions::default()
+            .compression_method(zip::CompressionMethod::Deflated);
+        zip.start_file("a.npy", deflate).unwrap();
+        zip.write_all(&claim).unwrap();
+        let bytes = zip.finish().unwrap().into_inner();
+        let e = Npz::from_bytes(bytes, Path::new("d.npz"))
+            .unwrap()
+            .floats("a", &[None])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`a`: the data has 32 bytes but shape (1099511627776,) of '<f8' needs 8796093022208"),
+            "{e}"
+        );
+        assert!(start.elapsed() < std::time::Duration::from_secs(5));
+    }
+
+    /// An endless device is refused at once, not read into memory.
+    #[cfg(unix)]
+    #[test]
+    fn an_endless_input_is_not_read_into_memory() {
+        let e = Npz::open(Path::new("/dev/zero")).unwrap_err().to_string();
+        assert!(e.starts_with("/dev/zero: not a readable .npz"), "{e}");
+        let e = crate::export::npy::read_npy(Path::new("/dev/zero"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("/dev/zero: not a .npy file"), "{e}");
     }
 
     #[test]
