@@ -5,7 +5,7 @@
 //! `--shard i/n` job and every resumed run computes the same plan, and sequence `index`
 //! means the same sequence everywhere.
 
-use weft_garment::rng::SplitMix64;
+use weft_mesh::rng::SplitMix64;
 use weft_motion::MotionKind;
 
 use crate::config::{DataConfig, FORMAT_VERSION};
@@ -16,6 +16,10 @@ use crate::manifest::{
 };
 use crate::split::Split;
 
+/// Mixed into every generator seeded here ("WEFTGARM", the salt of the garment
+/// generator plans first drew from), so that plans keep drawing the same numbers.
+const PLAN_SALT: u64 = 0x5745_4654_4741_524d;
+
 /// Streams of derived seeds, one per kind of thing drawn.
 const STREAM_GARMENT: u64 = 1;
 const STREAM_BODY: u64 = 2;
@@ -25,7 +29,8 @@ const STREAM_MOTION: u64 = 3;
 pub fn derive_seed(seed: u64, stream: u64, index: u64) -> u64 {
     let mut r = SplitMix64::new(
         seed ^ stream.wrapping_mul(0x9e37_79b9_7f4a_7c15)
-            ^ index.wrapping_mul(0xd1b5_4a32_d192_ed03),
+            ^ index.wrapping_mul(0xd1b5_4a32_d192_ed03)
+            ^ PLAN_SALT,
     );
     r.next_u64()
 }
@@ -123,7 +128,8 @@ pub fn plan(
         }
         // One normal stream per split: adding a validation body never changes the train
         // shapes.
-        let mut rng = SplitMix64::new(derive_seed(config.seed, STREAM_BODY, split_index as u64));
+        let mut rng =
+            SplitMix64::new(derive_seed(config.seed, STREAM_BODY, split_index as u64) ^ PLAN_SALT);
         let components = config.beta_components.min(num_betas);
         for _ in 0..sc.random_bodies {
             let mut betas = vec![0.0f32; num_betas];

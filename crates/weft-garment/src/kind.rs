@@ -1,8 +1,13 @@
 //! Garment kinds and their seeded style parameters.
 
-use crate::rng::SplitMix64;
+use weft_mesh::rng::SplitMix64;
+
 use crate::skirt::SkirtLength;
 use crate::GarmentError;
+
+/// Mixed into every style seed ("WEFTGARM"), so a garment's draws differ from other
+/// streams seeded with the same number.
+const STYLE_SALT: u64 = 0x5745_4654_4741_524d;
 
 /// The procedural garment kinds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -97,7 +102,7 @@ pub struct Style {
 impl Style {
     /// Style drawn from `seed`: the same seed always gives the same style.
     pub fn from_seed(kind: GarmentKind, seed: u64) -> Self {
-        let mut r = SplitMix64::new(seed);
+        let mut r = SplitMix64::new(seed ^ STYLE_SALT);
         let (lo, hi) = match kind {
             GarmentKind::Tank | GarmentKind::Pants | GarmentKind::Shorts => (0.012, 0.025),
             GarmentKind::Skirt | GarmentKind::Dress => (0.015, 0.03),

@@ -18,7 +18,6 @@ pub mod obj;
 pub mod onbody;
 mod pants;
 pub mod prepare;
-pub mod rng;
 pub mod skirt;
 mod top;
 mod tube;

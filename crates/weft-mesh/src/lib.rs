@@ -13,6 +13,7 @@ pub mod io;
 pub mod mesh;
 pub mod nystrom;
 pub mod primitives;
+pub mod rng;
 pub mod topology;
 pub mod validate;
 pub mod vec3;

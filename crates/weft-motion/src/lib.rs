@@ -34,7 +34,6 @@ mod procedural;
 mod resample;
 mod rest;
 mod retarget;
-mod rng;
 mod rot;
 mod smpl_bvh;
 mod stats;

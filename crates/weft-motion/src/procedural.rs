@@ -26,16 +26,16 @@ use std::f64::consts::{PI, TAU};
 use std::fmt;
 
 use nalgebra::{UnitQuaternion, Vector3};
+use weft_body::joints::SMPL_JOINT_COUNT;
+use weft_body::Pose;
+use weft_mesh::rng::SplitMix64;
 
 use super::error::MotionError;
 use super::fk::posed_joints;
 use super::limits::{soft_limit, soft_limit_pose};
 use super::rest::DEFAULT_REST_JOINTS;
-use super::rng::SplitMix64;
 use super::rot::about_axis;
 use super::types::{Motion, MAX_FRAMES};
-use weft_body::joints::SMPL_JOINT_COUNT;
-use weft_body::Pose;
 
 /// The motions of the procedural library.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -1,33 +1,27 @@
-//! Deterministic test data: a splitmix64 stream, random graphs and tensors.
+//! Deterministic test data: a SplitMix64 stream, random graphs and tensors.
 
 use burn::tensor::{DType, Device, Tensor, TensorData};
+use weft_mesh::rng::SplitMix64;
 use weft_mesh::Graph;
 
 use crate::adjacency::Adjacency;
 
-/// splitmix64: a tiny deterministic generator for test data.
-pub(crate) struct Rng(u64);
+/// Test-data draws over weft-mesh's seeded generator.
+pub(crate) struct Rng(SplitMix64);
 
 impl Rng {
     pub(crate) fn new(seed: u64) -> Self {
-        Rng(seed)
-    }
-
-    pub(crate) fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        Rng(SplitMix64::new(seed))
     }
 
     /// Uniform in `[-1, 1)`.
     pub(crate) fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        self.0.uniform(-1.0, 1.0)
     }
 
+    /// In `0..n`, by remainder (the test data's draws; [`SplitMix64::below`] differs).
     pub(crate) fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
+        (self.0.next_u64() % n as u64) as usize
     }
 
     pub(crate) fn values(&mut self, len: usize) -> Vec<f64> {

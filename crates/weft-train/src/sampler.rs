@@ -7,28 +7,7 @@
 //! the items the uninterrupted run would have drawn.
 
 use serde::{Deserialize, Serialize};
-
-/// SplitMix64 (Steele, Lea & Flood 2014): a tiny, well-mixed generator whose state is
-/// one `u64`.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct SplitMix64(pub u64);
-
-impl SplitMix64 {
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `0..n` (`n > 0`), by Lemire's multiply-shift (bias below 2⁻³²
-    /// for the item counts here).
-    pub fn below(&mut self, n: usize) -> usize {
-        ((u128::from(self.next_u64()) * n as u128) >> 64) as usize
-    }
-}
+use weft_mesh::rng::SplitMix64;
 
 /// Where the sampler is: the epoch and the position within its order.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -50,7 +29,7 @@ pub struct Sampler {
 
 /// The order of epoch `epoch`.
 pub fn epoch_order(seed: u64, epoch: usize, items: usize) -> Vec<usize> {
-    let mut rng = SplitMix64(seed ^ (epoch as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
+    let mut rng = SplitMix64::new(seed ^ (epoch as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
     let mut order: Vec<usize> = (0..items).collect();
     for i in (1..items).rev() {
         order.swap(i, rng.below(i + 1));

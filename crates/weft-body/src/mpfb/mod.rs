@@ -47,6 +47,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
+use weft_mesh::rng::SplitMix64;
 
 pub use error::MpfbError;
 
@@ -145,29 +146,10 @@ pub fn find_data_dir(dir: &Path) -> Result<PathBuf, MpfbError> {
     ))
 }
 
-/// A small, fixed random generator (SplitMix64), so the sampled shapes depend on the
-/// seed alone, not on a crate's version.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `[lo, hi)`.
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        let u = (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
-        lo + (hi - lo) * u
-    }
-}
-
 /// The macro settings the shape space is built from.
 pub fn sample_phenotypes(n: usize, seed: u64) -> Vec<Phenotype> {
-    let mut rng = SplitMix(seed);
+    // weft-mesh's own generator: the shapes depend on the seed alone, not on a crate.
+    let mut rng = SplitMix64::new(seed);
     (0..n)
         .map(|_| Phenotype {
             gender: rng.uniform(0.0, 1.0),
