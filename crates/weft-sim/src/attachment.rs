@@ -17,8 +17,9 @@ use weft_mesh::{Topology, TriMesh};
 
 use crate::error::SimError;
 
-/// Which garment vertices follow the body's skin.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Which garment vertices follow the body's skin (in TOML: `none`, `top_opening`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Attachment {
     /// None: the garment is held by contact and friction alone.
     None,

@@ -38,12 +38,14 @@ use rayon::prelude::*;
 use weft_mesh::{Hinge, Topology, TriMesh};
 
 use crate::energy::{Energy, HessianKind};
-use crate::error::{check_count, check_len, check_nonneg, check_vertex, SimError};
+use crate::error::{check_count, check_eval, check_nonneg, check_vertex, Output, SimError};
 use crate::math::{axpy3, project_psd12, skew, v3};
 use crate::sparse::{BlockCsr, ElementSlots};
 
-/// How the per-hinge weight `w_e` is computed from the rest shape.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// How the per-hinge weight `w_e` is computed from the rest shape (in TOML: `hood`,
+/// `discrete_shells`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum BendingScale {
     /// `|ē|² / (8(Ā₁ + Ā₂))`, HOOD's (and SNUG's) scaling.
     #[default]
@@ -52,8 +54,9 @@ pub enum BendingScale {
     DiscreteShells,
 }
 
-/// The rest angle of each hinge.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// The rest angle of each hinge (in TOML: `flat`, `from_rest`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum RestAngle {
     /// `θ̄ = 0`: bending towards flat (HOOD).
     #[default]
@@ -179,7 +182,7 @@ impl Bending {
 
     /// The signed dihedral angle of every hinge at `x` (0 for a degenerate hinge).
     pub fn dihedral_angles(&self, x: &[[f64; 3]]) -> Result<Vec<f64>, SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
+        check_eval(self.vertex_count, x, Output::Value)?;
         Ok(self
             .hinges
             .iter()
@@ -334,7 +337,7 @@ impl Energy for Bending {
     }
 
     fn value(&self, x: &[[f64; 3]]) -> Result<f64, SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
+        check_eval(self.vertex_count, x, Output::Value)?;
         Ok(self
             .hinges
             .par_iter()
@@ -352,8 +355,7 @@ impl Energy for Bending {
         scale: f64,
         grad: &mut [[f64; 3]],
     ) -> Result<f64, SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
-        check_len("gradient", self.vertex_count, grad.len())?;
+        check_eval(self.vertex_count, x, Output::Gradient(grad.len()))?;
         // Hinge gradients in parallel, scatter serial.
         let per_hinge: Vec<Option<(f64, V12)>> = self
             .hinges
@@ -389,8 +391,7 @@ impl Energy for Bending {
         kind: HessianKind,
         hess: &mut BlockCsr,
     ) -> Result<(), SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
-        check_len("hessian", self.vertex_count, hess.block_rows())?;
+        check_eval(self.vertex_count, x, Output::Hessian(hess.block_rows()))?;
         // Hinge matrices (and their eigen-projections) in parallel, serial scatter.
         let blocks: Vec<Result<Option<HingeBlock>, SimError>> = self
             .hinges

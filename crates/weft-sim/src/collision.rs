@@ -14,7 +14,7 @@ use nalgebra::Matrix3;
 
 use crate::contact::{validate_contacts, VertexContact};
 use crate::energy::{Energy, HessianKind};
-use crate::error::{check_len, check_nonneg, SimError};
+use crate::error::{check_eval, check_nonneg, Output, SimError};
 use crate::math::{axpy3, v3};
 use crate::sparse::BlockCsr;
 
@@ -86,7 +86,7 @@ impl CubicCollision {
     /// The force magnitude `3 k_c max(ε − d, 0)²` of each contact at `x`, in contact
     /// order: the lagged normal force friction can use.
     pub fn normal_forces(&self, x: &[[f64; 3]]) -> Result<Vec<f64>, SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
+        check_eval(self.vertex_count, x, Output::Value)?;
         Ok(self
             .contacts
             .iter()
@@ -103,7 +103,7 @@ impl Energy for CubicCollision {
         self.vertex_count
     }
     fn value(&self, x: &[[f64; 3]]) -> Result<f64, SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
+        check_eval(self.vertex_count, x, Output::Value)?;
         Ok(self
             .contacts
             .iter()
@@ -116,8 +116,7 @@ impl Energy for CubicCollision {
         scale: f64,
         grad: &mut [[f64; 3]],
     ) -> Result<f64, SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
-        check_len("gradient", self.vertex_count, grad.len())?;
+        check_eval(self.vertex_count, x, Output::Gradient(grad.len()))?;
         let mut e = 0.0;
         for c in &self.contacts {
             let s = self.depth(c, x);
@@ -134,8 +133,7 @@ impl Energy for CubicCollision {
         _kind: HessianKind,
         hess: &mut BlockCsr,
     ) -> Result<(), SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
-        check_len("hessian", self.vertex_count, hess.block_rows())?;
+        check_eval(self.vertex_count, x, Output::Hessian(hess.block_rows()))?;
         for c in &self.contacts {
             let s = self.depth(c, x);
             if s > 0.0 {

@@ -11,8 +11,9 @@
 use crate::error::SimError;
 use crate::sparse::BlockCsr;
 
-/// Which Hessian to assemble.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// Which Hessian to assemble (in TOML: `exact`, `projected`, `surrogate`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum HessianKind {
     /// The exact second derivative (may be indefinite: StVK under compression, bending
     /// away from the rest angle, the seed 000 stretch term under compression).

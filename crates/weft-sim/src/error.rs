@@ -87,7 +87,7 @@ pub enum SimError {
     },
     /// The body surface could not be built or updated (empty mesh, bad index, a
     /// non-finite vertex, a refit with another vertex count).
-    #[error("body surface: {0}")]
+    #[error("the body surface could not be built or updated")]
     BodySurface(#[from] weft_body::query::QueryError),
     /// The simulation produced non-finite positions or did not converge.
     #[error("step diverged: {message}")]
@@ -107,6 +107,33 @@ pub(crate) fn check_len(what: &'static str, expected: usize, got: usize) -> Resu
             expected,
             got,
         })
+    }
+}
+
+/// The buffer an [`Energy`](crate::Energy) method writes besides reading positions, for
+/// [`check_eval`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Output {
+    /// `value`: nothing but the positions.
+    Value,
+    /// `add_gradient`: a gradient of this many vertices.
+    Gradient(usize),
+    /// `add_hessian`: a block matrix of this many block rows.
+    Hessian(usize),
+}
+
+/// The prologue of every [`Energy`](crate::Energy) method: the positions and the output
+/// hold the energy's `vertex_count` vertices each.
+pub(crate) fn check_eval(
+    vertex_count: usize,
+    x: &[[f64; 3]],
+    output: Output,
+) -> Result<(), SimError> {
+    check_len("positions", vertex_count, x.len())?;
+    match output {
+        Output::Value => Ok(()),
+        Output::Gradient(n) => check_len("gradient", vertex_count, n),
+        Output::Hessian(n) => check_len("hessian", vertex_count, n),
     }
 }
 

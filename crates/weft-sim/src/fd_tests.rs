@@ -10,6 +10,7 @@
 use nalgebra::DMatrix;
 use proptest::prelude::*;
 use weft_mesh::primitives::grid;
+use weft_mesh::rng::SplitMix64;
 use weft_mesh::{Topology, TriMesh};
 
 use crate::*;
@@ -18,21 +19,16 @@ const H: f64 = 1e-6;
 const GRAD_RTOL: f64 = 1e-6;
 const HESS_RTOL: f64 = 1e-5;
 
-/// SplitMix64: a tiny seeded generator, so each proptest case is one `u64`.
-struct Rng(u64);
+/// Test-data draws over weft-mesh's SplitMix64, so each proptest case is one `u64`.
+struct Rng(SplitMix64);
 
 impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
+    fn new(seed: u64) -> Self {
+        Rng(SplitMix64::new(seed))
     }
     /// Uniform in `[a, b)`.
     fn uniform(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.next()
+        self.0.uniform(a, b)
     }
     fn vec3(&mut self, s: f64) -> [f64; 3] {
         [
@@ -187,7 +183,7 @@ proptest! {
 
     #[test]
     fn stretch_derivatives(seed in any::<u64>()) {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let rest = rest_mesh(&mut rng);
         let x = perturbed(&rest.positions, &mut rng, 0.15);
         let frames = RestFrames::from_rest_mesh(&rest).unwrap();
@@ -197,7 +193,7 @@ proptest! {
 
     #[test]
     fn stretch_from_uvs_derivatives(seed in any::<u64>()) {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let rest = rest_mesh(&mut rng);
         // UVs: the flat grid, scaled (a garment pattern in metres).
         let uv: Vec<[f64; 2]> = grid(3, 3, 0.5).positions.iter().map(|p| [1.1 * p[0], 0.9 * p[2]]).collect();
@@ -209,7 +205,7 @@ proptest! {
 
     #[test]
     fn bending_derivatives(seed in any::<u64>(), shells in any::<bool>(), from_rest in any::<bool>()) {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let rest = rest_mesh(&mut rng);
         let x = perturbed(&rest.positions, &mut rng, 0.2);
         prop_assume!(min_area(&rest, &x) > 0.02);
@@ -226,7 +222,7 @@ proptest! {
     #[test]
     fn single_hinge_at_large_angles(seed in any::<u64>()) {
         // One hinge folded anywhere in (−2.8, 2.8) rad.
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let rest = TriMesh::new(
             vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.3, 0.8, 0.0], [0.6, -0.9, 0.0]],
             vec![[0, 1, 2], [1, 0, 3]],
@@ -243,7 +239,7 @@ proptest! {
 
     #[test]
     fn gravity_and_inertia_derivatives(seed in any::<u64>()) {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let rest = rest_mesh(&mut rng);
         let dens: Vec<f64> = (0..rest.face_count()).map(|_| rng.uniform(0.05, 0.7)).collect();
         let m = lumped_masses(&rest, &dens).unwrap();
@@ -257,7 +253,7 @@ proptest! {
 
     #[test]
     fn collision_derivatives(seed in any::<u64>()) {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let x: Vec<[f64; 3]> = (0..6).map(|_| rng.vec3(0.5)).collect();
         let eps = 2e-3;
         let contacts: Vec<VertexContact> = (0..6u32)
@@ -281,7 +277,7 @@ proptest! {
 
     #[test]
     fn friction_derivatives(seed in any::<u64>()) {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let x: Vec<[f64; 3]> = (0..5).map(|_| rng.vec3(0.5)).collect();
         // A slip length large enough that the finite differences' truncation error on
         // the mollifier (relative h²/ε²) stays far below the tolerance.
@@ -313,7 +309,7 @@ proptest! {
 
     #[test]
     fn multilevel_membrane_derivatives(seed in any::<u64>()) {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let rest = rest_mesh(&mut rng);
         let x = perturbed(&rest.positions, &mut rng, 0.15);
         let uv: Vec<[f64; 2]> = grid(3, 3, 0.5).positions.iter().map(|p| [p[0], p[2]]).collect();
@@ -324,7 +320,7 @@ proptest! {
 
     #[test]
     fn full_potential_derivatives(seed in any::<u64>()) {
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let rest = rest_mesh(&mut rng);
         let x = perturbed(&rest.positions, &mut rng, 0.1);
         prop_assume!(min_area(&rest, &x) > 0.02);
@@ -408,7 +404,7 @@ fn full_potential(rest: &TriMesh, x: &[[f64; 3]], rng: &mut Rng) -> IncrementalP
 
 #[test]
 fn stretch_is_zero_and_psd_at_rest() {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let rest = rest_mesh(&mut rng);
     let e = Stretch::uniform(&rest, Material::hood().stretch_params()).unwrap();
     let (v, g) = gradient_of(&e, &rest.positions).unwrap();

@@ -31,7 +31,7 @@ use nalgebra::Matrix3;
 
 use crate::contact::unit;
 use crate::energy::{Energy, HessianKind};
-use crate::error::{check_len, check_nonneg, check_vertex, SimError};
+use crate::error::{check_eval, check_nonneg, check_vertex, Output, SimError};
 use crate::math::{axpy3, finite3, v3};
 use crate::sparse::BlockCsr;
 
@@ -173,7 +173,7 @@ impl Energy for Friction {
         self.vertex_count
     }
     fn value(&self, x: &[[f64; 3]]) -> Result<f64, SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
+        check_eval(self.vertex_count, x, Output::Value)?;
         Ok(self
             .contacts
             .iter()
@@ -186,8 +186,7 @@ impl Energy for Friction {
         scale: f64,
         grad: &mut [[f64; 3]],
     ) -> Result<f64, SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
-        check_len("gradient", self.vertex_count, grad.len())?;
+        check_eval(self.vertex_count, x, Output::Gradient(grad.len()))?;
         let mut e = 0.0;
         for c in &self.contacts {
             let (u, y) = Self::tangential(c, x);
@@ -205,8 +204,7 @@ impl Energy for Friction {
         _kind: HessianKind,
         hess: &mut BlockCsr,
     ) -> Result<(), SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
-        check_len("hessian", self.vertex_count, hess.block_rows())?;
+        check_eval(self.vertex_count, x, Output::Hessian(hess.block_rows()))?;
         for c in &self.contacts {
             let (u, y) = Self::tangential(c, x);
             let w = c.mu * c.normal_force * scale;

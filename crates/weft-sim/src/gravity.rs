@@ -9,7 +9,7 @@
 use weft_mesh::TriMesh;
 
 use crate::energy::{Energy, HessianKind};
-use crate::error::{check_count, check_len, check_nonneg, check_vertex, SimError};
+use crate::error::{check_count, check_eval, check_nonneg, check_vertex, Output, SimError};
 use crate::math::{axpy3, finite3};
 use crate::sparse::BlockCsr;
 
@@ -83,7 +83,7 @@ impl Energy for Gravity {
         self.masses.len()
     }
     fn value(&self, x: &[[f64; 3]]) -> Result<f64, SimError> {
-        check_len("positions", self.masses.len(), x.len())?;
+        check_eval(self.masses.len(), x, Output::Value)?;
         let g = self.g;
         Ok(-x
             .iter()
@@ -97,7 +97,7 @@ impl Energy for Gravity {
         scale: f64,
         grad: &mut [[f64; 3]],
     ) -> Result<f64, SimError> {
-        check_len("gradient", self.masses.len(), grad.len())?;
+        check_eval(self.masses.len(), x, Output::Gradient(grad.len()))?;
         let e = self.value(x)?;
         for (gr, m) in grad.iter_mut().zip(&self.masses) {
             axpy3(gr, -scale * m, self.g);
@@ -111,8 +111,7 @@ impl Energy for Gravity {
         _kind: HessianKind,
         hess: &mut BlockCsr,
     ) -> Result<(), SimError> {
-        check_len("positions", self.masses.len(), x.len())?;
-        check_len("hessian", self.masses.len(), hess.block_rows())
+        check_eval(self.masses.len(), x, Output::Hessian(hess.block_rows()))
     }
     fn for_each_stencil(&self, _f: &mut dyn FnMut(&[u32])) {}
 }

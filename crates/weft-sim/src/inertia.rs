@@ -7,7 +7,7 @@
 //! `M(x − x̂)/h² = −∇U(x)`.
 
 use crate::energy::{Energy, HessianKind};
-use crate::error::{check_len, check_nonneg, SimError};
+use crate::error::{check_eval, check_len, check_nonneg, Output, SimError};
 use crate::gravity::check_masses;
 use crate::math::{axpy3, finite3};
 use crate::sparse::BlockCsr;
@@ -107,7 +107,7 @@ impl Energy for Inertia {
         self.masses.len()
     }
     fn value(&self, x: &[[f64; 3]]) -> Result<f64, SimError> {
-        check_len("positions", self.masses.len(), x.len())?;
+        check_eval(self.masses.len(), x, Output::Value)?;
         let c = 0.5 / (self.dt * self.dt);
         Ok(x.iter()
             .zip(&self.target)
@@ -123,7 +123,7 @@ impl Energy for Inertia {
         scale: f64,
         grad: &mut [[f64; 3]],
     ) -> Result<f64, SimError> {
-        check_len("gradient", self.masses.len(), grad.len())?;
+        check_eval(self.masses.len(), x, Output::Gradient(grad.len()))?;
         let e = self.value(x)?;
         let c = scale / (self.dt * self.dt);
         for (((gr, p), t), m) in grad.iter_mut().zip(x).zip(&self.target).zip(&self.masses) {
@@ -138,8 +138,7 @@ impl Energy for Inertia {
         _kind: HessianKind,
         hess: &mut BlockCsr,
     ) -> Result<(), SimError> {
-        check_len("positions", self.masses.len(), x.len())?;
-        check_len("hessian", self.masses.len(), hess.block_rows())?;
+        check_eval(self.masses.len(), x, Output::Hessian(hess.block_rows()))?;
         let c = scale / (self.dt * self.dt);
         for (i, m) in self.masses.iter().enumerate() {
             hess.add_block(i, i, &(Matrix3::identity() * (c * m)))?;

@@ -14,26 +14,59 @@
 use crate::error::{check_nonneg, SimError};
 use crate::stretch::StretchParams;
 
-/// A homogeneous cloth material.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A homogeneous cloth material. A TOML table sets any of its fields; the others keep
+/// the defaults of [`Material::hood`] stated on each field (the presets stay the way to
+/// name a fabric: `Material::preset("silk")`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Material {
-    /// Preset name.
-    pub name: &'static str,
-    /// Area density, kg/m².
+    /// Preset name. In a file: one of [`PRESET_NAMES`] (any case) or `custom`; the name
+    /// only labels the material, the values are the fields'. Default: `hood`.
+    #[serde(deserialize_with = "known_name")]
+    pub name: StaticName,
+    /// Area density, kg/m². Default: 0.20022.
     pub density: f64,
-    /// Young's modulus, Pa.
+    /// Young's modulus, Pa. Default: about 70 079 (from HOOD's `μ`, `λ`).
     pub young_modulus: f64,
-    /// Poisson's ratio, in [0, 0.5).
+    /// Poisson's ratio, in [0, 0.5) (unitless). Default: about 0.4847 (from HOOD's `μ`, `λ`).
     pub poisson_ratio: f64,
-    /// Shell thickness, m.
+    /// Shell thickness, m. Default: 4.7·10⁻⁴ (0.47 mm).
     pub thickness: f64,
     /// Bending stiffness `k_b` of the dihedral energy in HOOD's scaling
     /// ([`crate::BendingScale::Hood`]), N·m. For a bending rigidity `B` (N·m, e.g. from
     /// the Kawabata B value), `k_b ≈ 4B` on regular meshes (the cylinder calibration in
-    /// `docs/physics.md`).
+    /// `docs/physics.md`). Default: 3.9626·10⁻⁵.
     pub bending_stiffness: f64,
-    /// Garment–body friction coefficient μ.
+    /// Garment–body friction coefficient μ (unitless). Default: 0.5.
     pub friction: f64,
+}
+
+/// `&'static str` under another name: serde borrows fields spelled `&str` from the input,
+/// which a `'static` name cannot be; [`known_name`] maps file names to static ones.
+type StaticName = &'static str;
+
+/// HOOD's material ([`Material::hood`]), the default of every field in a file.
+impl Default for Material {
+    fn default() -> Self {
+        Material::hood()
+    }
+}
+
+/// The name a file gives a material: a preset's (case-insensitive) or `custom`. Names
+/// are `&'static str` so materials stay `Copy`; an unknown one is refused, not leaked.
+fn known_name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<&'static str, D::Error> {
+    let name = <std::borrow::Cow<'de, str> as serde::Deserialize>::deserialize(d)?;
+    PRESET_NAMES
+        .iter()
+        .chain(&["custom"])
+        .find(|n| n.eq_ignore_ascii_case(&name))
+        .copied()
+        .ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "unknown material name `{name}`; expected one of {} or custom",
+                PRESET_NAMES.join(", ")
+            ))
+        })
 }
 
 /// Names of the presets, in [`Material::presets`] order.
@@ -236,6 +269,32 @@ mod tests {
             Material::preset("tweed"),
             Err(SimError::UnknownMaterial { .. })
         ));
+    }
+
+    #[test]
+    fn materials_round_trip_through_toml_and_partial_tables_take_defaults() {
+        for m in Material::presets() {
+            let text = toml::to_string(&m).unwrap();
+            assert_eq!(toml::from_str::<Material>(&text).unwrap(), m, "{text}");
+        }
+        let m: Material = toml::from_str("name = \"Custom\"\ndensity = 0.3\n").unwrap();
+        assert_eq!(
+            m,
+            Material {
+                name: "custom",
+                density: 0.3,
+                ..Material::hood()
+            }
+        );
+        assert_eq!(toml::from_str::<Material>("").unwrap(), Material::default());
+        let e = toml::from_str::<Material>("densty = 0.3")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unknown field `densty`"), "{e}");
+        let e = toml::from_str::<Material>("name = \"tweed\"")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unknown material name `tweed`"), "{e}");
     }
 
     #[test]

@@ -19,10 +19,10 @@ use nalgebra::{Matrix3x2, SMatrix, Vector3};
 use rayon::prelude::*;
 use weft_mesh::TriMesh;
 
-use crate::error::{check_count, check_len, check_vertex, SimError};
+use crate::energy::HessianKind;
+use crate::error::{check_count, check_eval, check_len, check_vertex, Output, SimError};
 use crate::math::{finite3, project_psd6, project_psd9, v3};
 use crate::sparse::{BlockCsr, ElementSlots};
-use crate::HessianKind;
 
 /// `∂²ψ/∂F²` as a 6×6 matrix, entry `(k + 3j, l + 3m)` = `∂²ψ/∂F_kj ∂F_lm`.
 pub(crate) type FHessian = SMatrix<f64, 6, 6>;
@@ -232,7 +232,7 @@ impl RestFrames {
 
     /// Checks that `x` has one position per vertex.
     pub(crate) fn check_positions(&self, x: &[[f64; 3]]) -> Result<(), SimError> {
-        check_len("positions", self.vertex_count, x.len())
+        check_eval(self.vertex_count, x, Output::Value)
     }
 }
 
@@ -273,8 +273,7 @@ pub(crate) fn membrane_gradient<D: MembraneDensity + Sync>(
     scale: f64,
     grad: &mut [[f64; 3]],
 ) -> Result<f64, SimError> {
-    frames.check_positions(x)?;
-    check_len("gradient", frames.vertex_count, grad.len())?;
+    check_eval(frames.vertex_count, x, Output::Gradient(grad.len()))?;
     // Stresses in parallel, scatter serial (three adds per face).
     let stresses: Vec<(f64, Matrix3x2<f64>)> = (0..frames.faces.len())
         .into_par_iter()
@@ -298,8 +297,7 @@ pub(crate) fn membrane_hessian<D: MembraneDensity + Sync>(
     kind: HessianKind,
     hess: &mut BlockCsr,
 ) -> Result<(), SimError> {
-    frames.check_positions(x)?;
-    check_len("hessian", frames.vertex_count, hess.block_rows())?;
+    check_eval(frames.vertex_count, x, Output::Hessian(hess.block_rows()))?;
     // Element matrices (and their eigen-projections, the bulk of the cost) and their
     // storage slots in parallel; the serial scatter only adds.
     let blocks: Vec<Result<FaceBlock, SimError>> = (0..frames.faces.len())

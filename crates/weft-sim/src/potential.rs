@@ -10,7 +10,7 @@
 use crate::bending::Bending;
 use crate::collision::CubicCollision;
 use crate::energy::{Energy, HessianKind};
-use crate::error::{check_len, SimError};
+use crate::error::{check_eval, check_len, Output, SimError};
 use crate::friction::Friction;
 use crate::gravity::Gravity;
 use crate::inertia::Inertia;
@@ -207,7 +207,7 @@ impl Energy for IncrementalPotential {
         self.vertex_count
     }
     fn value(&self, x: &[[f64; 3]]) -> Result<f64, SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
+        check_eval(self.vertex_count, x, Output::Value)?;
         let mut e = 0.0;
         for t in &self.terms {
             if t.weight != 0.0 {
@@ -222,8 +222,7 @@ impl Energy for IncrementalPotential {
         scale: f64,
         grad: &mut [[f64; 3]],
     ) -> Result<f64, SimError> {
-        check_len("positions", self.vertex_count, x.len())?;
-        check_len("gradient", self.vertex_count, grad.len())?;
+        check_eval(self.vertex_count, x, Output::Gradient(grad.len()))?;
         let mut e = 0.0;
         for t in &self.terms {
             if t.weight != 0.0 {

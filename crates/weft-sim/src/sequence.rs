@@ -26,28 +26,43 @@ use crate::error::SimError;
 use crate::material::Material;
 use crate::solver::{ClothSimulator, SimOptions};
 
-/// How a sequence is simulated.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// How a sequence is simulated. A TOML table sets any of these; the others keep the
+/// defaults stated on each field.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct SequenceOptions {
-    /// Implicit-Euler steps per output frame (`>= 1`).
+    /// Implicit-Euler steps per output frame (`>= 1`). Default: 4.
     pub substeps: usize,
     /// Frames (at the motion's rate) before the first output frame: the first third
     /// holds the rest pose (the garment drapes under gravity), the rest blends the pose
-    /// from rest to the motion's first frame.
+    /// from rest to the motion's first frame. Default: 15.
     pub warmup_frames: usize,
-    /// The simulator's parameters.
+    /// The simulator's parameters. Default: [`SimOptions::default`] with
+    /// `newton.max_iterations` = [`SEQUENCE_NEWTON_BUDGET`] (4). A `[sim]` table in a
+    /// file starts from [`SimOptions::default`] itself (50 Newton iterations), so set
+    /// `sim.newton.max_iterations` there to keep the sequence budget.
     pub sim: SimOptions,
-    /// How the body is posed.
+    /// How the body is posed (in TOML: `lbs`, `dqs`). Default: [`Skinning::Lbs`].
+    #[serde(with = "SkinningDef")]
     pub skinning: Skinning,
     /// A garment vertex deeper than this inside the rest-pose body (m) makes the input
     /// invalid; shallower ones are moved out to the surface (plus the collision
-    /// threshold) before the simulation starts.
+    /// threshold) before the simulation starts. Default: 0.02 m.
     pub max_initial_penetration: f64,
-    /// Use at most this many motion frames (`None`: all).
+    /// Use at most this many motion frames (`None`, or the key left out: all). Default:
+    /// `None`.
     pub max_frames: Option<usize>,
     /// Garment vertices that follow the body's skin (default: the top opening, i.e.
     /// the waistband or neckline; see [`crate::attachment`]).
     pub attachment: Attachment,
+}
+
+/// [`Skinning`]'s serde form (weft-body has no serde): `lbs` or `dqs`.
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(remote = "Skinning", rename_all = "snake_case")]
+enum SkinningDef {
+    Lbs,
+    Dqs,
 }
 
 /// Newton iterations per sub-step in a sequence: a fixed budget (the energy still
@@ -124,7 +139,7 @@ pub enum SequenceError {
     #[error(transparent)]
     Input(#[from] SimError),
     /// The body or the motion could not be posed.
-    #[error("posing the body: {0}")]
+    #[error("the body could not be posed")]
     Body(#[from] BodyError),
     /// The garment starts too deep inside the body.
     #[error("the garment starts inside the body: {count} vertices inside, the deepest {max_depth:.4} m (more than {limit} m); fit the garment to this body shape and its rest pose")]
@@ -534,6 +549,62 @@ mod tests {
     /// body ends every frame with no vertex deeper inside the body than the collision
     /// threshold, and a mean |edge strain| below 1 %. The 4 000-vertex figures are in
     /// docs/benchmarks.md (`weft simulate`).
+    /// Issue 11: the simulator's parameters go in TOML like every other config.
+    #[test]
+    fn options_round_trip_through_toml_and_refuse_unknown_keys() {
+        let mut o = SequenceOptions {
+            skinning: Skinning::Dqs,
+            max_frames: Some(7),
+            attachment: Attachment::None,
+            ..SequenceOptions::default()
+        };
+        o.sim.bending_scale = crate::BendingScale::DiscreteShells;
+        o.sim.newton.hessian = crate::HessianKind::Projected;
+        let text = toml::to_string(&o).unwrap();
+        assert_eq!(
+            toml::from_str::<SequenceOptions>(&text).unwrap(),
+            o,
+            "{text}"
+        );
+        let d = SequenceOptions::default();
+        assert_eq!(
+            toml::from_str::<SequenceOptions>(&toml::to_string(&d).unwrap()).unwrap(),
+            d
+        );
+
+        // A partial file: what it names changes, everything else keeps its default.
+        let partial: SequenceOptions = toml::from_str(
+            "substeps = 2\nskinning = \"dqs\"\n[sim]\ncontact_radius = 0.01\n[sim.newton]\nmax_iterations = 4\n",
+        )
+        .unwrap();
+        let mut want = SequenceOptions {
+            substeps: 2,
+            skinning: Skinning::Dqs,
+            ..d
+        };
+        want.sim.contact_radius = 0.01;
+        assert_eq!(partial, want);
+        assert_eq!(
+            toml::from_str::<SimOptions>("").unwrap(),
+            SimOptions::default()
+        );
+
+        for (text, key) in [
+            ("substep = 2", "substep"),
+            ("[sim]\ncontact_radus = 0.01", "contact_radus"),
+            ("[sim.newton]\ntolerence = 1e-6", "tolerence"),
+        ] {
+            let e = toml::from_str::<SequenceOptions>(text)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(&format!("unknown field `{key}`")), "{text}: {e}");
+        }
+        let e = toml::from_str::<SequenceOptions>("skinning = \"lbd\"")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unknown variant `lbd`"), "{e}");
+    }
+
     #[test]
     fn silk_skirt_walks_without_penetration_or_stretch() {
         let body = weft_body::default_body().unwrap();

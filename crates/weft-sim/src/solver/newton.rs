@@ -16,20 +16,23 @@ use crate::potential::IncrementalPotential;
 use crate::solver::pcg::pcg;
 use crate::sparse::BlockCsr;
 
-/// Newton's stopping and inner-solve parameters.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Newton's stopping and inner-solve parameters. A TOML table sets any of them; the
+/// others keep the defaults stated on each field.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct NewtonOptions {
-    /// At most this many Newton iterations.
+    /// At most this many Newton iterations. Default: 50.
     pub max_iterations: usize,
     /// Converged when the largest vertex displacement of a step is below this, m.
+    /// Default: 1e-5 m.
     pub tolerance: f64,
-    /// Relative residual of the PCG solve.
+    /// Relative residual of the PCG solve (unitless). Default: 1e-3.
     pub cg_rtol: f64,
-    /// At most this many PCG iterations per Newton iteration.
+    /// At most this many PCG iterations per Newton iteration. Default: 1000.
     pub cg_max_iterations: usize,
-    /// Armijo constant `c`.
+    /// Armijo constant `c` (unitless). Default: 1e-4.
     pub armijo: f64,
-    /// At most this many step halvings.
+    /// At most this many step halvings. Default: 30.
     pub max_halvings: usize,
     /// Newton's matrix: [`HessianKind::Surrogate`] (default: no element eigen-
     /// decompositions, measured fastest per step) or [`HessianKind::Projected`].
@@ -37,7 +40,7 @@ pub struct NewtonOptions {
     /// Loosest PCG relative residual of the forcing sequence: iteration `k` solves to
     /// `max(cg_rtol, min(cg_rtol_loose, ‖g_k‖∞/‖g_0‖∞))`, so early iterations, far
     /// from the minimum, take a rough direction cheaply (inexact Newton,
-    /// Eisenstat–Walker). Set it equal to `cg_rtol` for a fixed tolerance.
+    /// Eisenstat–Walker). Set it equal to `cg_rtol` for a fixed tolerance. Default: 1e-2.
     pub cg_rtol_loose: f64,
 }
 

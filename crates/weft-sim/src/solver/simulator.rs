@@ -28,28 +28,33 @@ use crate::solver::newton::{minimize, NewtonOptions, NewtonReport};
 use crate::sparse::BlockCsr;
 use crate::stretch::Stretch;
 
-/// Simulator parameters (defaults: HOOD's contact parameters, standard gravity).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Simulator parameters (defaults: HOOD's contact parameters, standard gravity). A TOML
+/// table sets any of them; the others keep the defaults stated on each field.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct SimOptions {
-    /// Gravitational acceleration, m/s².
+    /// Gravitational acceleration, m/s². Default: [`STANDARD_GRAVITY`], `[0, -9.81, 0]`.
     pub gravity: [f64; 3],
-    /// Cubic collision stiffness `k_c`.
+    /// Cubic collision stiffness `k_c`, J/m³ (energy `k_c (ε − d)³` per vertex).
+    /// Default: [`HOOD_COLLISION_STIFFNESS`], 5·10⁵.
     pub collision_stiffness: f64,
-    /// Collision threshold ε, m.
+    /// Collision threshold ε, m. Default: [`HOOD_COLLISION_EPS`], 2 mm.
     pub collision_eps: f64,
-    /// Vertices closer than this to the body get a collision contact, m.
+    /// Vertices closer than this to the body get a collision contact, m. Default: 2 cm.
     pub contact_radius: f64,
-    /// Vertices closer than this get a friction contact, m.
+    /// Vertices closer than this get a friction contact, m. Default:
+    /// [`HOOD_FRICTION_RADIUS`], 3 mm.
     pub friction_radius: f64,
-    /// Friction mollifier slip length, m.
+    /// Friction mollifier slip length, m. Default: [`DEFAULT_FRICTION_EPS`], 0.1 mm.
     pub friction_eps: f64,
-    /// Bending weight form.
+    /// Bending weight form. Default: [`BendingScale::Hood`].
     pub bending_scale: BendingScale,
-    /// Bending rest angle.
+    /// Bending rest angle. Default: [`RestAngle::Flat`].
     pub rest_angle: RestAngle,
-    /// Newton parameters.
+    /// Newton parameters (a `[newton]` table). Default: [`NewtonOptions::default`].
     pub newton: NewtonOptions,
     /// A step whose largest vertex speed exceeds this (m/s) is reported as diverged.
+    /// Default: 100 m/s.
     pub max_speed: f64,
 }
 
