@@ -100,8 +100,7 @@ fn the_default_body_is_built_in() {
     let o = weft(&[
         "render",
         s(&g),
-        "--body",
-        "default",
+        "--default-body",
         "--camera",
         "front",
         "--size",

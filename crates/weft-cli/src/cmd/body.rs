@@ -11,6 +11,7 @@ use weft_body::{BodyModel, Skinning};
 use weft_mesh::io::write_mesh;
 use weft_motion::{read_motion, MotionFileOptions, MotionSource};
 
+use super::body_args::{BodyArgs, BodyModelArg};
 use super::emit;
 
 #[derive(Subcommand)]
@@ -31,17 +32,9 @@ pub enum BodyCommand {
 }
 
 #[derive(Args)]
-pub struct BodyArg {
-    /// An SMPL-format body model (.npz: v_template, shapedirs, posedirs, J_regressor,
-    /// weights, kintree_table, f); default: weft's own body (assets/body).
-    #[arg(long, value_name = "FILE.npz")]
-    body: Option<PathBuf>,
-}
-
-#[derive(Args)]
 pub struct InfoArgs {
     #[command(flatten)]
-    body: BodyArg,
+    body: BodyModelArg,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -49,18 +42,9 @@ pub struct InfoArgs {
 
 #[derive(Args)]
 pub struct ExportArgs {
+    /// The body and its shape β (for weft's body in standard deviations).
     #[command(flatten)]
-    body: BodyArg,
-    /// Shape coefficients β1,β2,… (missing ones are 0), in standard deviations for
-    /// weft's body.
-    #[arg(
-        long,
-        value_name = "B1,B2,…",
-        value_delimiter = ',',
-        allow_hyphen_values = true,
-        default_value = "0"
-    )]
-    betas: Vec<f64>,
+    body: BodyArgs,
     /// Output: .obj or .ply (the rest mesh), or .npz (the model with β baked in).
     #[arg(long, value_name = "FILE")]
     out: PathBuf,
@@ -75,16 +59,7 @@ enum SkinningArg {
 #[derive(Args)]
 pub struct PoseArgs {
     #[command(flatten)]
-    body: BodyArg,
-    /// Shape coefficients β1,β2,… (missing ones are 0).
-    #[arg(
-        long,
-        value_name = "B1,B2,…",
-        value_delimiter = ',',
-        allow_hyphen_values = true,
-        default_value = "0"
-    )]
-    betas: Vec<f64>,
+    body: BodyArgs,
     /// The motion: AMASS-style .npz or .bvh (see `weft motion`).
     #[arg(long, value_name = "FILE")]
     motion: PathBuf,
@@ -145,13 +120,6 @@ pub fn run(command: BodyCommand) -> Result<()> {
     }
 }
 
-fn load(arg: &BodyArg) -> Result<BodyModel> {
-    match &arg.body {
-        Some(path) => Ok(BodyModel::load(path)?),
-        None => weft_body::default_body().context("loading the default body"),
-    }
-}
-
 fn joint_name(j: usize, count: usize) -> String {
     if count == SMPL_JOINT_COUNT {
         SMPL_JOINT_NAMES[j].to_string()
@@ -161,7 +129,7 @@ fn joint_name(j: usize, count: usize) -> String {
 }
 
 fn info(args: &InfoArgs) -> Result<()> {
-    let model = load(&args.body)?;
+    let (model, _) = args.body.load()?;
     let shaped = model.shaped(&[])?;
     let mesh = model.mesh(shaped.vertices.clone());
     let bbox = mesh.bounding_box();
@@ -229,7 +197,8 @@ fn info(args: &InfoArgs) -> Result<()> {
 }
 
 fn export(args: &ExportArgs) -> Result<()> {
-    let model = load(&args.body)?;
+    let (model, _) = args.body.load()?;
+    let betas = args.body.betas(&model)?;
     let ext = args
         .out
         .extension()
@@ -237,17 +206,22 @@ fn export(args: &ExportArgs) -> Result<()> {
         .map(str::to_ascii_lowercase);
     if ext.as_deref() == Some("npz") {
         let mut parts = model.to_parts();
-        parts.v_template = model.shape_vertices(&args.betas)?;
+        parts.v_template = model.shape_vertices(&betas)?;
         let shaped = BodyModel::new(parts, model.source())?;
         shaped.save(&args.out)?;
     } else {
-        let mesh = model.shape(&args.betas)?;
+        let mesh = model.shape(&betas)?;
         write_mesh(&args.out, &mesh)?;
     }
+    // The β given (missing ones are 0), as typed: `[0]` when none.
+    let given = match args.body.betas.as_slice() {
+        [] => &[0.0][..],
+        b => b,
+    };
     emit(&format!(
         "wrote {} (β = [{}], {} vertices)",
         args.out.display(),
-        args.betas
+        given
             .iter()
             .map(|b| format!("{b}"))
             .collect::<Vec<_>>()
@@ -257,8 +231,8 @@ fn export(args: &ExportArgs) -> Result<()> {
 }
 
 fn pose(args: &PoseArgs) -> Result<()> {
-    let model = load(&args.body)?;
-    let shaped = model.shaped(&args.betas)?;
+    let (model, _) = args.body.load()?;
+    let shaped = model.shaped(&args.body.betas(&model)?)?;
     if model.joint_count() != SMPL_JOINT_COUNT {
         bail!(
             "{}: the body has {} joints; posing with a motion needs SMPL's {SMPL_JOINT_COUNT}",
@@ -424,8 +398,12 @@ mod tests {
         d
     }
 
-    fn default_arg() -> BodyArg {
-        BodyArg { body: None }
+    /// The default body at shape `betas`.
+    fn default_body(betas: &[f64]) -> BodyArgs {
+        BodyArgs {
+            model: BodyModelArg { body: None },
+            betas: betas.to_vec(),
+        }
     }
 
     #[test]
@@ -433,8 +411,7 @@ mod tests {
         let d = temp("export");
         let obj = d.join("b.obj");
         export(&ExportArgs {
-            body: default_arg(),
-            betas: vec![2.0],
+            body: default_body(&[2.0]),
             out: obj.clone(),
         })
         .unwrap();
@@ -445,8 +422,7 @@ mod tests {
         // The .npz has β baked in: at β = 0 it is the β = 2 body.
         let npz = d.join("b.npz");
         export(&ExportArgs {
-            body: default_arg(),
-            betas: vec![2.0],
+            body: default_body(&[2.0]),
             out: npz.clone(),
         })
         .unwrap();
@@ -457,12 +433,11 @@ mod tests {
         }
         // Too many betas name the model and the limit.
         let e = export(&ExportArgs {
-            body: default_arg(),
-            betas: vec![0.0; 11],
+            body: default_body(&[0.0; 11]),
             out: d.join("c.obj"),
         })
         .unwrap_err();
-        assert!(e.to_string().contains("11 shape coefficients"), "{e}");
+        assert!(format!("{e:#}").contains("11 shape coefficients"), "{e:#}");
         let _ = std::fs::remove_dir_all(&d);
     }
 
@@ -479,8 +454,7 @@ mod tests {
         )
         .unwrap();
         let args = |frame, all, out: PathBuf| PoseArgs {
-            body: default_arg(),
-            betas: vec![0.0],
+            body: default_body(&[0.0]),
             motion: motion_path.clone(),
             frame,
             all_frames: all,
@@ -502,10 +476,11 @@ mod tests {
 
     #[test]
     fn info_of_a_missing_file_names_it() {
-        let e = load(&BodyArg {
+        let e = BodyModelArg {
             body: Some("/no/such/body.npz".into()),
-        })
+        }
+        .load()
         .unwrap_err();
-        assert!(e.to_string().starts_with("/no/such/body.npz"), "{e}");
+        assert!(format!("{e:#}").contains("/no/such/body.npz"), "{e:#}");
     }
 }

@@ -15,6 +15,7 @@ use weft_garment::prepare::{
 use weft_garment::{DressTop, FitBody, GarmentKind, SkirtLength, Style};
 use weft_mesh::{Topology, TriMesh};
 
+use super::body_args::{shape, BodyArgs, BodyModelArg};
 use super::emit;
 
 #[derive(Subcommand)]
@@ -39,12 +40,8 @@ pub struct GenerateArgs {
     /// Target vertex count (300 to 50 000; within ±15% from 500 to 12 000).
     #[arg(long, default_value = "4000")]
     vertices: String,
-    /// A body model in the SMPL .npz layout to fit to; default: weft's default body.
-    #[arg(long)]
-    body: Option<PathBuf>,
-    /// Shape coefficients β of that body, comma-separated (missing ones are 0).
-    #[arg(long, allow_hyphen_values = true)]
-    betas: Option<String>,
+    #[command(flatten)]
+    body: BodyArgs,
     /// Seed of the style parameters (ease, flare, length, dress top, hem waviness).
     #[arg(long, default_value = "0")]
     seed: String,
@@ -69,9 +66,8 @@ pub struct GarmentOnBody {
     /// out keeps the file's UVs, groups and face corners: only `v` lines change.
     #[arg(long)]
     garment: PathBuf,
-    /// A body model in the SMPL .npz layout; default: weft's default body.
-    #[arg(long)]
-    body: Option<PathBuf>,
+    #[command(flatten)]
+    body: BodyModelArg,
 }
 
 /// Drape parameters shared by `drape` and `prepare`.
@@ -96,11 +92,22 @@ pub struct ResizeArgs {
     #[command(flatten)]
     garment: GarmentOnBody,
     /// β of the body the garment was fitted to, comma-separated (default: all 0).
-    #[arg(long, allow_hyphen_values = true)]
-    from_betas: Option<String>,
+    #[arg(
+        long,
+        value_name = "B1,B2,…",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    from_betas: Vec<f64>,
     /// β of the body to fit it to.
-    #[arg(long, allow_hyphen_values = true)]
-    to_betas: String,
+    #[arg(
+        long,
+        required = true,
+        value_name = "B1,B2,…",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    to_betas: Vec<f64>,
     /// Output mesh (.obj or .ply).
     #[arg(long)]
     out: PathBuf,
@@ -114,8 +121,13 @@ pub struct DrapeArgs {
     #[command(flatten)]
     garment: GarmentOnBody,
     /// β of the body (default: all 0).
-    #[arg(long, allow_hyphen_values = true)]
-    betas: Option<String>,
+    #[arg(
+        long,
+        value_name = "B1,B2,…",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    betas: Vec<f64>,
     #[command(flatten)]
     drape: DrapeFlags,
     /// Output mesh (.obj or .ply).
@@ -131,11 +143,21 @@ pub struct PrepareArgs {
     #[command(flatten)]
     garment: GarmentOnBody,
     /// β of the body the garment was fitted to (default: all 0).
-    #[arg(long, allow_hyphen_values = true)]
-    from_betas: Option<String>,
+    #[arg(
+        long,
+        value_name = "B1,B2,…",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    from_betas: Vec<f64>,
     /// β of the body to prepare it for (default: all 0, no resize).
-    #[arg(long, allow_hyphen_values = true)]
-    betas: Option<String>,
+    #[arg(
+        long,
+        value_name = "B1,B2,…",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    betas: Vec<f64>,
     /// Skip the drape (resize and weights only).
     #[arg(long)]
     no_drape: bool,
@@ -192,8 +214,8 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
             _ => bail!("--dress-top {t:?}: expected strapless, straps or sleeves"),
         };
     }
-    let (model, name) = load_body(a.body.as_deref())?;
-    let betas = parse_betas("betas", a.betas.as_deref(), &model, &name)?;
+    let (model, name) = a.body.load()?;
+    let betas = a.body.betas(&model)?;
     let fit = FitBody::new(&model, &betas).with_context(|| format!("{name}: fitting"))?;
     let garment = fit.generate(kind, &style, vertices)?;
     let fitted_to = name;
@@ -208,34 +230,6 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
         openings,
         fitted_to
     ))
-}
-
-/// The body model and a name for messages.
-fn load_body(path: Option<&Path>) -> Result<(BodyModel, String)> {
-    Ok(match path {
-        Some(path) => (BodyModel::load(path)?, path.display().to_string()),
-        None => (weft_body::default_body()?, "the default body".to_string()),
-    })
-}
-
-/// `--flag b1,b2,…` padded with zeros to the model's β count (absent: all zeros).
-fn parse_betas(flag: &str, text: Option<&str>, model: &BodyModel, name: &str) -> Result<Vec<f64>> {
-    let mut betas: Vec<f64> = match text {
-        None => Vec::new(),
-        Some(text) => text
-            .split(',')
-            .map(|b| number(flag, b))
-            .collect::<Result<_>>()?,
-    };
-    if betas.len() > model.num_betas() {
-        bail!(
-            "--{flag} has {} values; {name} has {}",
-            betas.len(),
-            model.num_betas()
-        );
-    }
-    betas.resize(model.num_betas(), 0.0);
-    Ok(betas)
 }
 
 fn fit_body(model: &BodyModel, betas: &[f64], name: &str) -> Result<FitBody> {
@@ -368,9 +362,9 @@ fn resize_line(r: &ResizeReport) -> String {
 }
 
 fn run_resize(a: &ResizeArgs) -> Result<()> {
-    let (model, name) = load_body(a.garment.body.as_deref())?;
-    let from = parse_betas("from-betas", a.from_betas.as_deref(), &model, &name)?;
-    let to = parse_betas("to-betas", Some(&a.to_betas), &model, &name)?;
+    let (model, name) = a.garment.body.load()?;
+    let from = shape(&model, &a.from_betas, "from-betas")?;
+    let to = shape(&model, &a.to_betas, "to-betas")?;
     let g = read_garment(&a.garment.garment)?;
     let r = resize(
         &g.mesh,
@@ -384,8 +378,8 @@ fn run_resize(a: &ResizeArgs) -> Result<()> {
 }
 
 fn run_drape(a: &DrapeArgs) -> Result<()> {
-    let (model, name) = load_body(a.garment.body.as_deref())?;
-    let betas = parse_betas("betas", a.betas.as_deref(), &model, &name)?;
+    let (model, name) = a.garment.body.load()?;
+    let betas = shape(&model, &a.betas, "betas")?;
     let (options, material) = drape_options(&a.drape)?;
     let g = read_garment(&a.garment.garment)?;
     let r = drape(
@@ -400,9 +394,9 @@ fn run_drape(a: &DrapeArgs) -> Result<()> {
 }
 
 fn run_prepare(a: &PrepareArgs) -> Result<()> {
-    let (model, name) = load_body(a.garment.body.as_deref())?;
-    let from = parse_betas("from-betas", a.from_betas.as_deref(), &model, &name)?;
-    let to = parse_betas("betas", a.betas.as_deref(), &model, &name)?;
+    let (model, name) = a.garment.body.load()?;
+    let from = shape(&model, &a.from_betas, "from-betas")?;
+    let to = shape(&model, &a.betas, "betas")?;
     let (options, material) = drape_options(&a.drape)?;
     let g = read_garment(&a.garment.garment)?;
     let body = fit_body(&model, &to, &name)?;

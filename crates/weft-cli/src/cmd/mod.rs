@@ -3,6 +3,7 @@
 mod animate;
 mod attribute;
 mod body;
+mod body_args;
 mod config;
 mod data;
 mod demo;

@@ -5,14 +5,13 @@ use clap::{Args, Subcommand, ValueEnum};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use weft_body::default_body::DEFAULT_BODY_NAME;
 use weft_body::joints::SMPL_JOINT_COUNT;
-use weft_body::{default_body, BodyModel};
 use weft_motion::{
     generate, motion_stats, read_motion, write_motion, BvhUnits, MapChoice, MotionFileOptions,
     MotionFormat, MotionKind, MotionSource, NameMap, ProceduralParams, SkeletonPreset, UpAxis,
 };
 
+use super::body_args::BodyArgs;
 use super::emit;
 
 #[derive(Subcommand)]
@@ -72,39 +71,19 @@ pub struct GenerateArgs {
     body: BodyArgs,
 }
 
-/// The body whose rest joints J(β) a motion file is written or read against.
-#[derive(Args)]
-struct BodyArgs {
-    /// A body model in the SMPL .npz layout whose rest joints shape the BVH skeleton,
-    /// the retargeting target and the placement of AMASS's root; default: weft's
-    /// default body.
-    #[arg(long)]
-    body: Option<PathBuf>,
-    /// Shape coefficients β of the body, comma-separated (missing ones are 0).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-    betas: Vec<f64>,
-}
-
-impl BodyArgs {
-    fn rest_joints(&self) -> Result<[[f64; 3]; SMPL_JOINT_COUNT]> {
-        let (model, name) = match &self.body {
-            Some(path) => (BodyModel::load(path)?, path.display().to_string()),
-            None => (default_body()?, DEFAULT_BODY_NAME.to_string()),
-        };
-        let mut betas = self.betas.clone();
-        if betas.len() < model.num_betas() {
-            betas.resize(model.num_betas(), 0.0);
-        }
-        let joints = model
-            .joints(&betas)
-            .with_context(|| format!("{name}: rest joints"))?;
-        joints.try_into().map_err(|j: Vec<[f64; 3]>| {
-            anyhow::anyhow!(
-                "{name}: the body has {} joints; motions drive SMPL's {SMPL_JOINT_COUNT}",
-                j.len()
-            )
-        })
-    }
+/// The rest joints J(β) of the body a motion file is written or read against: they
+/// shape the BVH skeleton, the retargeting target and the placement of AMASS's root.
+fn rest_joints(body: &BodyArgs) -> Result<[[f64; 3]; SMPL_JOINT_COUNT]> {
+    let (model, name) = body.load()?;
+    let joints = model
+        .joints(&body.betas(&model)?)
+        .with_context(|| format!("{name}: rest joints"))?;
+    joints.try_into().map_err(|j: Vec<[f64; 3]>| {
+        anyhow::anyhow!(
+            "{name}: the body has {} joints; motions drive SMPL's {SMPL_JOINT_COUNT}",
+            j.len()
+        )
+    })
 }
 
 #[derive(Args)]
@@ -160,7 +139,7 @@ fn generate_cmd(args: &GenerateArgs) -> Result<()> {
     let motion = generate(&params).with_context(|| format!("generating {}", args.kind))?;
     let options = MotionFileOptions {
         npz_up: args.npz_up.into(),
-        rest_joints: args.body.rest_joints()?,
+        rest_joints: rest_joints(&args.body)?,
         ..MotionFileOptions::default()
     };
     write_motion(&args.out, &motion, &options)?;
@@ -186,7 +165,7 @@ fn info(args: &InfoArgs) -> Result<()> {
     let format = MotionFormat::from_path(&args.file)?;
     let mut options = MotionFileOptions {
         fps_if_missing: args.fps,
-        rest_joints: args.body.rest_joints()?,
+        rest_joints: rest_joints(&args.body)?,
         ..MotionFileOptions::default()
     };
     if let Some(up) = args.up {

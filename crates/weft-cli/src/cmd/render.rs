@@ -14,17 +14,22 @@ use weft_render::{
     GARMENT_COLOR,
 };
 
+use super::body_args::BodyArgs;
 use super::emit;
 
 #[derive(Args)]
+#[command(mut_arg("body", |a| a
+    .value_name("FILE")
+    .help("A body drawn under the garment in a neutral grey: an .obj/.ply mesh (e.g. a frame of `weft body pose`), or an SMPL-format body model (.npz) in its rest pose at --betas")))]
 pub struct RenderArgs {
     /// An .obj or .ply mesh, or a directory of .obj/.ply frames (drawn as a contact sheet
     /// in natural file-name order, or as an animation with --animate).
     input: PathBuf,
-    /// A body drawn under the garment in a neutral grey: an .obj/.ply mesh, or `default`
-    /// for weft's default body in its rest shape and pose.
-    #[arg(long, value_name = "FILE|default")]
-    body: Option<PathBuf>,
+    #[command(flatten)]
+    body: BodyArgs,
+    /// Draw weft's built-in body under the garment, in its rest pose at --betas.
+    #[arg(long, conflicts_with = "body")]
+    default_body: bool,
     /// A .npy array of f32 or f64 values, one per garment vertex: shape (N,), or for a
     /// directory of frames (N,) for every frame or (frames, N) one row per frame.
     /// Non-finite values are drawn magenta and reported.
@@ -153,15 +158,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     for p in &frame_paths {
         frames.push(load_mesh(p)?.mesh);
     }
-    let body = match &args.body {
-        Some(p) if p.as_os_str() == "default" => Some(
-            weft_body::default_body()
-                .and_then(|m| m.shape(&[]))
-                .context("loading the default body")?,
-        ),
-        Some(p) => Some(load_mesh(p)?.mesh),
-        None => None,
-    };
+    let body = body_mesh(args)?;
     let values = match &args.color_by {
         Some(p) => Some(read_values(p, &frame_paths, &frames)?),
         None => None,
@@ -202,7 +199,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 None => Paint::Solid(GARMENT_COLOR),
             };
             let mut scene = Vec::with_capacity(2);
-            if let Some(b) = &body {
+            if let Some((b, _)) = &body {
                 scene.push(
                     SceneMesh::new("--body", b, Paint::Solid(BODY_COLOR)).with_shading(shading),
                 );
@@ -270,10 +267,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             frames[0].vertex_count()
         )?;
     }
-    match &args.body {
-        Some(b) if b.as_os_str() == "default" => write!(out, " over the default body")?,
-        Some(b) => write!(out, " over {}", b.display())?,
-        None => {}
+    if let Some((_, name)) = &body {
+        write!(out, " over {name}")?;
     }
     if let Some(v) = &values {
         let all = v.rows.iter().flatten().copied();
@@ -288,6 +283,34 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         )?;
     }
     emit(&out)
+}
+
+/// The body drawn under the garment and its name: a mesh file as it is, or a body model
+/// (the file's or the built-in one) at --betas; `None` when no body was asked for.
+fn body_mesh(args: &RenderArgs) -> Result<Option<(TriMesh, String)>> {
+    let b = &args.body;
+    match &b.model.body {
+        Some(p) if !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("npz")) => {
+            if !b.betas.is_empty() {
+                bail!(
+                    "--betas shapes a body model (.npz or --default-body); {} is a mesh",
+                    p.display()
+                );
+            }
+            Ok(Some((load_mesh(p)?.mesh, p.display().to_string())))
+        }
+        None if !args.default_body => {
+            if !b.betas.is_empty() {
+                bail!("--betas shapes the body of --body FILE.npz or --default-body; give one of them");
+            }
+            Ok(None)
+        }
+        _ => {
+            let (model, name) = b.load()?;
+            let mesh = model.shape(&b.betas(&model)?)?;
+            Ok(Some((mesh, name)))
+        }
+    }
 }
 
 /// `v` with at most 4 decimals and no trailing zeros: 7.989999771 -> 7.99.

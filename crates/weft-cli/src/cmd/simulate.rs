@@ -7,8 +7,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
-use weft_body::default_body::DEFAULT_BODY_NAME;
-use weft_body::{default_body, BodyModel};
+use weft_body::BodyModel;
 use weft_mesh::export::{write_obj_sequence, write_pc2, Frames, Pc2Timing};
 use weft_mesh::io::{load_mesh, write_atomic};
 use weft_motion::{generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams};
@@ -17,6 +16,7 @@ use weft_sim::{
     SimulatedSequence,
 };
 
+use super::body_args::BodyArgs;
 use super::emit;
 
 #[derive(Args)]
@@ -25,12 +25,8 @@ pub struct SimulateArgs {
     /// `weft garment generate` writes it).
     #[arg(long, value_name = "G.obj")]
     garment: PathBuf,
-    /// A body model in the SMPL .npz layout; default: weft's default body.
-    #[arg(long, value_name = "FILE.npz")]
-    body: Option<PathBuf>,
-    /// Shape coefficients β of the body, comma-separated (missing ones are 0).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-    betas: Vec<f64>,
+    #[command(flatten)]
+    body: BodyArgs,
     /// The motion: an .npz (AMASS layout) or .bvh file, or a procedural motion name
     /// (walk, run, jump, dance, kick, raise-arms, twist, bow).
     #[arg(long, value_name = "FILE|NAME")]
@@ -81,19 +77,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let garment = load_mesh(&args.garment)
         .with_context(|| format!("reading the garment {}", args.garment.display()))?
         .mesh;
-    let (model, body_name) = match &args.body {
-        Some(path) => (BodyModel::load(path)?, path.display().to_string()),
-        None => (default_body()?, DEFAULT_BODY_NAME.to_string()),
-    };
-    if args.betas.len() > model.num_betas() {
-        bail!(
-            "--betas has {} values; {body_name} has {}",
-            args.betas.len(),
-            model.num_betas()
-        );
-    }
-    let mut betas = args.betas.clone();
-    betas.resize(model.num_betas(), 0.0);
+    let (model, _) = args.body.load()?;
+    let betas = args.body.betas(&model)?;
     let motion = load_motion(args, &model, &betas)?;
     let mut opts = SequenceOptions {
         max_frames: args.frames,
@@ -146,7 +131,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     bar.finish_and_clear();
     let info = Info {
         garment: &args.garment,
-        body: &body_name,
+        body: model.source(),
         material: material.name,
         motion: &args.motion,
         fps: motion.fps(),
@@ -267,7 +252,7 @@ fn write_outputs(
     let stats = json!({
         "garment": info.garment.display().to_string(),
         "body": info.body,
-        "betas": args.betas,
+        "betas": args.body.betas,
         "material": info.material,
         "motion": info.motion,
         "fps": info.fps,
