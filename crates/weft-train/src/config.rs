@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, TrainError};
 use crate::loss::TermWeights;
+use crate::optim::{LrScheduleConfig, OptimizerConfig};
 use crate::schedule::ScheduleConfig;
 
 /// Training hyper-parameters; [`TrainConfig::preset`] gives the `cpu` and `paper` ones.
@@ -15,10 +16,18 @@ pub struct TrainConfig {
     pub seed: u64,
     /// Optimiser steps of the whole run.
     pub steps: usize,
-    /// Initial Adamax learning rate (seed 000 supp. §4: 3e-3).
+    /// Initial learning rate (seed 000 supp. §4: 3e-3).
     pub learning_rate: f64,
-    /// Final learning rate of the cosine annealing.
+    /// The floor of the learning rate: where cosine annealing ends, and below which no
+    /// decaying schedule goes.
     pub min_learning_rate: f64,
+    /// The optimiser (seed 000 supp. §4: Adamax).
+    pub optimizer: OptimizerConfig,
+    /// How the learning rate moves (seed 000 supp. §4: cosine annealing).
+    pub lr_schedule: LrScheduleConfig,
+    /// Keep this many newest checkpoints (the one `latest` names always stays); 0: keep
+    /// every checkpoint.
+    pub keep_checkpoints: usize,
     /// Consecutive frames per training window (the frames of a window share one pair
     /// encoding and form one batch for the network).
     pub window: usize,
@@ -47,6 +56,9 @@ impl Default for TrainConfig {
             steps: 3000,
             learning_rate: 3e-3,
             min_learning_rate: 3e-5,
+            optimizer: OptimizerConfig::default(),
+            lr_schedule: LrScheduleConfig::default(),
+            keep_checkpoints: 3,
             window: 8,
             batch: 1,
             checkpoint_every: 250,
@@ -129,6 +141,8 @@ impl TrainConfig {
                 ));
             }
         }
+        self.optimizer.validate()?;
+        self.lr_schedule.validate()?;
         self.weights.validate()?;
         self.schedule.validate()
     }
@@ -154,6 +168,21 @@ mod tests {
         assert_eq!(partial.weights.vertex, 2.0);
         assert_eq!(partial.weights.edge, 15.0);
         assert!(toml::from_str::<TrainConfig>("stepz = 7\n").is_err());
+        let e = toml::from_str::<TrainConfig>("[optimizer]\nkind = \"adam\"\nbeta_3 = 0.5\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("beta_3"), "{e}");
+        let adam: TrainConfig =
+            toml::from_str("[optimizer]\nkind = \"adam\"\n[lr_schedule]\nkind = \"plateau\"\nfactor = 0.5\npatience = 3\n")
+                .unwrap();
+        adam.validate().unwrap();
+        assert_eq!(
+            adam.lr_schedule,
+            LrScheduleConfig::Plateau {
+                factor: 0.5,
+                patience: 3
+            }
+        );
         let bad = TrainConfig {
             min_learning_rate: 1.0,
             ..TrainConfig::default()

@@ -32,6 +32,7 @@ use weft_models::ModelKind;
 
 use crate::config::TrainConfig;
 use crate::error::{Result, TrainError};
+use crate::optim::LrState;
 use crate::sampler::Cursor;
 use crate::schedule::ScheduleState;
 
@@ -51,6 +52,10 @@ pub struct TrainerState {
     pub cursor: Cursor,
     /// The two-step schedule.
     pub schedule: ScheduleState,
+    /// The learning-rate schedule's state (the plateau schedule's rate and patience;
+    /// absent in checkpoints written before it existed).
+    #[serde(default)]
+    pub lr: LrState,
     /// Non-finite steps in a row at the time of the checkpoint.
     pub non_finite_in_a_row: usize,
     /// The last validation error, mm.
@@ -260,7 +265,37 @@ impl RunDir {
             &self.layout.latest(),
             RunLayout::latest_text(&stem).as_bytes(),
         )?;
+        self.prune(&stem)?;
         Ok(model_path)
+    }
+
+    /// Deletes all but the `keep_checkpoints` newest checkpoints (0: keeps every one),
+    /// never `latest`'s (`latest` names `kept`, already written).
+    fn prune(&self, kept: &str) -> Result<()> {
+        let keep = self.train.keep_checkpoints;
+        if keep == 0 {
+            return Ok(());
+        }
+        let steps = self.layout.checkpoint_steps()?;
+        let old = steps.len().saturating_sub(keep);
+        for &step in &steps[..old] {
+            let stem = Self::stem(step);
+            if stem == kept {
+                continue;
+            }
+            for path in [
+                self.layout.state(&stem),
+                self.layout.optimizer_record(&stem),
+                self.layout.model_record(&stem),
+            ] {
+                match std::fs::remove_file(&path) {
+                    Ok(()) => {}
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                    Err(e) => return Err(TrainError::io(path, e)),
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The stem `latest` names, if any.

@@ -1,5 +1,6 @@
-//! The training loop, generic over what is trained ([`TrainTask`]): Adamax with cosine
-//! annealing, the two-step schedule, checkpoints, the metrics log, the progress bar and
+//! The training loop, generic over what is trained ([`TrainTask`]): the configured
+//! optimiser and learning-rate schedule ([`crate::optim`]), the two-step schedule,
+//! checkpoints (the newest `keep_checkpoints` kept), the metrics log, the progress bar and
 //! the non-finite guard.
 //!
 //! One step: take `batch` items from the sampler, evaluate the phase's loss terms for
@@ -12,17 +13,16 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use burn::grad_clipping::GradientClippingConfig;
 use burn::module::{Module, ParamGroup};
 use burn::optim::{GradientsParams, ModuleOptimizer};
 use burn::tensor::Tensor;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use weft_nn::{cosine_annealing, AdamaxConfig};
 
 use crate::config::TrainConfig;
 use crate::error::{Result, TrainError};
 use crate::loss::Term;
 use crate::metrics::{MetricsLog, Record};
+use crate::optim::{LrSchedule, LrState};
 use crate::run::{RunDir, TrainerState, FORMAT_VERSION};
 use crate::sampler::{Cursor, Sampler};
 use crate::schedule::{Phase, ScheduleState};
@@ -95,11 +95,7 @@ fn apply_phase<T: TrainTask>(task: &T, model: T::Model, phase: Phase) -> T::Mode
 }
 
 fn optimizer(cfg: &TrainConfig) -> ModuleOptimizer {
-    let optim = AdamaxConfig::new().init();
-    match cfg.grad_clip_norm {
-        Some(norm) => optim.with_grad_clipping(GradientClippingConfig::Norm(norm as f32).init()),
-        None => optim,
-    }
+    cfg.optimizer.init(cfg.grad_clip_norm)
 }
 
 fn host_scalar(t: &Tensor<1>) -> f64 {
@@ -144,6 +140,7 @@ pub fn train<T: TrainTask>(
             step: 0,
             cursor: Cursor::default(),
             schedule: ScheduleState::default(),
+            lr: LrState::default(),
             non_finite_in_a_row: 0,
             validation_mm: None,
         };
@@ -157,11 +154,14 @@ pub fn train<T: TrainTask>(
     model = apply_phase(task, model, state.schedule.phase);
     task.on_phase(state.schedule.phase);
 
-    // The cosine schedule is a pure function of the step: fast-forward it.
-    let mut lr_schedule = cosine_annealing(cfg.learning_rate, cfg.min_learning_rate, cfg.steps)?;
-    for _ in 0..state.step {
-        lr_schedule.step();
-    }
+    let mut lr_schedule = LrSchedule::new(
+        &cfg.lr_schedule,
+        cfg.learning_rate,
+        cfg.min_learning_rate,
+        cfg.steps,
+        state.step,
+        state.lr.clone(),
+    )?;
     let mut sampler = Sampler::new(cfg.seed, items, state.cursor);
     let total = cfg.steps;
     let end = options
@@ -184,6 +184,8 @@ pub fn train<T: TrainTask>(
     if !options.resume && cfg.validate_every > 0 {
         let v = task.validate(&model.valid())?;
         state.validation_mm = Some(v);
+        lr_schedule.observe_validation(v);
+        state.lr = lr_schedule.state().clone();
         log.push(Record {
             phase: state.schedule.phase.name().into(),
             lr: cfg.learning_rate,
@@ -201,7 +203,7 @@ pub fn train<T: TrainTask>(
 
     while state.step < end {
         let started = Instant::now();
-        let lr = lr_schedule.step().base();
+        let lr = lr_schedule.next_rate();
         let phase = state.schedule.phase;
         let weighted = phase.weighted_terms(&cfg.weights, &cfg.schedule);
         let terms: Vec<Term> = weighted.iter().map(|&(t, _)| t).collect();
@@ -303,6 +305,13 @@ pub fn train<T: TrainTask>(
             let v = task.validate(&model.valid())?;
             state.validation_mm = Some(v);
             record.validation_mm = Some(v);
+            if let Some(rate) = lr_schedule.observe_validation(v) {
+                bar.println(format!(
+                    "step {}: no better validation for a while; learning rate {rate:.3e}",
+                    state.step
+                ));
+            }
+            state.lr = lr_schedule.state().clone();
         }
         let ms = started.elapsed().as_secs_f64() * 1e3;
         if record.event.as_deref() != Some("non_finite") {

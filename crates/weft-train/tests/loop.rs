@@ -274,10 +274,29 @@ fn a_resumed_run_continues_bit_for_bit() {
     assert_eq!(outcome.steps, 10);
     assert_eq!(outcome.phase, Phase::FullPhysics);
     let straight_log = std::fs::read_to_string(straight_dir.join("metrics.jsonl")).unwrap();
+    // Checkpoints at steps 3, 6, 9 and 10; the default keeps the newest 3.
+    let mut kept: Vec<String> = std::fs::read_dir(straight_dir.join("checkpoints"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".state.json"))
+        .collect();
+    kept.sort();
+    assert_eq!(
+        kept,
+        [
+            "step-000006.state.json",
+            "step-000009.state.json",
+            "step-000010.state.json"
+        ]
+    );
 
-    // Half, stop, resume.
+    // Half, stop, resume. Every checkpoint kept: the kill below goes back to step 3.
     let split_dir = temp_dir("split");
-    let run = run_in(&split_dir, &cfg, &toy, "toy");
+    let keep_all = TrainConfig {
+        keep_checkpoints: 0,
+        ..cfg.clone()
+    };
+    let run = run_in(&split_dir, &keep_all, &toy, "toy");
     let half = RunOptions {
         session_steps: Some(5),
         ..RunOptions::default()
