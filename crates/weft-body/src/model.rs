@@ -349,7 +349,8 @@ impl BodyModel {
 
     /// The `.npz` bytes of this model: floats as `f32` (plenty for positions in metres
     /// and weights; keeps files small), `kintree_table` as `i64` with −1 for the root,
-    /// `f` as `u32`, deflated. `posedirs` is written only when nonzero.
+    /// `f` as `u32`, deflated. All seven SMPL keys are written (`posedirs` as zeros when the
+    /// model has none; reading drops an all-zero `posedirs` again).
     pub fn to_npz(&self) -> Result<NpzWriter, std::io::Error> {
         let (v, j, b) = (self.vertex_count(), self.joint_count(), self.num_betas);
         let f32s = |x: &[f64]| x.iter().map(|&a| a as f32).collect::<Vec<f32>>();
@@ -357,12 +358,12 @@ impl BodyModel {
         let vt: Vec<f64> = self.v_template.iter().flatten().copied().collect();
         w.add("v_template", &[v, 3], &f32s(&vt))?;
         w.add("shapedirs", &[v, 3, b], &f32s(&self.shapedirs))?;
-        if let Some(pd) = &self.posedirs {
-            w.add(
-                "posedirs",
-                &[v, 3, POSE_FEATURES_PER_JOINT * (j - 1)],
-                &f32s(pd),
-            )?;
+        // Always written, zeros when the body has no pose correctives: SMPL tooling
+        // (smplx, the chumpy loaders) reads `posedirs` unconditionally.
+        let p = POSE_FEATURES_PER_JOINT * (j - 1);
+        match &self.posedirs {
+            Some(pd) => w.add("posedirs", &[v, 3, p], &f32s(pd))?,
+            None => w.add("posedirs", &[v, 3, p], &vec![0.0f32; v * 3 * p])?,
         }
         w.add("J_regressor", &[j, v], &f32s(&self.j_regressor_dense()))?;
         w.add("weights", &[v, j], &f32s(&self.weights.to_dense()))?;
@@ -902,7 +903,23 @@ pub(crate) mod tests {
         std::fs::create_dir_all(&d).unwrap();
         let path = d.join("toy.npz");
         toy().save(&path).unwrap();
+        // Every SMPL key, posedirs included though the toy has no pose correctives.
+        let mut keys = weft_mesh::io::npz::Npz::open(&path).unwrap().keys();
+        keys.sort();
+        assert_eq!(
+            keys,
+            [
+                "J_regressor",
+                "f",
+                "kintree_table",
+                "posedirs",
+                "shapedirs",
+                "v_template",
+                "weights"
+            ]
+        );
         let m = BodyModel::load_or_default(Some(&path)).unwrap();
+        assert!(!m.has_pose_blend_shapes());
         assert_eq!((m.num_betas(), m.joint_count()), (2, 3));
         assert_eq!(m.source(), path.display().to_string());
         let m = BodyModel::load_or_default(None).unwrap();

@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use weft_data::Silent;
-use weft_eval::demo::{run_demo, DemoOptions, StandInSimulator};
+use weft_pipeline::demo::{run_demo, DemoOptions};
+use weft_pipeline::stand_in::StandInSimulator;
 
 mod common;
 use common::{s, stderr, stdout, weft};

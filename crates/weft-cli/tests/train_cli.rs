@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use weft_data::{generate, DataConfig, GarmentSpec, GenerateOptions, MotionSpec, Silent};
-use weft_eval::demo::StandInSimulator;
+use weft_pipeline::stand_in::StandInSimulator;
 
 mod common;
 use common::{s, scratch, stderr, stdout, weft};

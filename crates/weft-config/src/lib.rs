@@ -111,23 +111,33 @@ pub fn overlay<T: Serialize + DeserializeOwned>(
     origin: &str,
     section: &str,
 ) -> Result<T, ConfigError> {
-    let mut merged = to_table(section, base)?;
+    let base = to_table(section, base)?;
+    let mut merged = base.clone();
     merge(&mut merged, file);
-    let value: T = toml::Value::Table(merged)
-        .try_into()
-        .map_err(|source| ConfigError::Value {
-            origin: origin.to_string(),
-            section: section.to_string(),
-            source: Box::new(source),
-        })?;
-    let kept = to_table(section, &value)?;
-    find_unknown(file, &kept, section).map_or(Ok(value), |(key, expected)| {
-        Err(ConfigError::UnknownKey {
+    let unknown = |kept: &toml::Table| {
+        find_unknown(file, kept, section).map(|(key, expected)| ConfigError::UnknownKey {
             origin: origin.to_string(),
             key,
             expected,
         })
-    })
+    };
+    let value: T = match toml::Value::Table(merged).try_into() {
+        Ok(value) => value,
+        // A struct that denies unknown fields fails here: name the key (dotted, as
+        // below) rather than serde's bare field name.
+        Err(source) => {
+            let denied = source.to_string().contains("unknown field");
+            return Err(unknown(&base)
+                .filter(|_| denied)
+                .unwrap_or_else(|| ConfigError::Value {
+                    origin: origin.to_string(),
+                    section: section.to_string(),
+                    source: Box::new(source),
+                }));
+        }
+    };
+    let kept = to_table(section, &value)?;
+    unknown(&kept).map_or(Ok(value), Err)
 }
 
 /// `over` merged into `base`: tables recursively (unless their `kind` differs), other

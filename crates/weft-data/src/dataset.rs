@@ -7,7 +7,7 @@ use weft_mesh::TriMesh;
 
 use crate::error::DataError;
 use crate::manifest::{partial_manifests, Manifest, SequenceRecord, MANIFEST_FILE};
-use crate::shard::{self, ShardShape, POSE_VALUES};
+use crate::shard::{self, ShardShape};
 use crate::split::Split;
 
 /// A generated dataset on disk (see [`crate::manifest`] for the layout).
@@ -28,8 +28,8 @@ pub struct Sequence {
     /// UV of each face corner (m), the flat pattern of the seed 000 stretch/shear losses
     /// and of rest frames; one row per face of `garment`.
     pub corner_uvs: Vec<[[f32; 2]; 3]>,
-    /// SMPL pose per frame: 24 axis-angle rotations, joint-major.
-    pub poses: Vec<[f32; POSE_VALUES]>,
+    /// SMPL pose per frame: 24 axis-angle rotations.
+    pub poses: Vec<weft_body::Pose>,
     /// Root translation per frame (m).
     pub trans: Vec<[f32; 3]>,
     /// Simulated garment vertex positions per frame (m).
@@ -148,7 +148,12 @@ impl Dataset {
     /// The body model the shapes belong to: weft's default body, or the SMPL `.npz`
     /// the config named.
     pub fn body_model(&self) -> Result<weft_body::BodyModel, DataError> {
-        crate::generate::load_body(self.manifest.config.body.as_deref())
+        weft_body::BodyModel::load_or_default(self.manifest.config.body.as_deref()).map_err(
+            |source| DataError::Body {
+                what: "model".into(),
+                source: Box::new(source),
+            },
+        )
     }
 }
 

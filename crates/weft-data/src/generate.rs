@@ -38,7 +38,7 @@ use crate::manifest::{
     GarmentRecord, Job, Manifest, MotionOrigin, MotionRecord, SequenceRecord, Status, MANIFEST_FILE,
 };
 use crate::plan::plan;
-use crate::shard::{self, ShardData, POSE_VALUES};
+use crate::shard::{self, ShardData};
 
 /// What a simulator needs for one sequence.
 pub struct SimInput<'a> {
@@ -194,20 +194,6 @@ pub struct GenerateReport {
     pub seconds: f64,
 }
 
-/// Loads the body model a config names (weft's default body when `None`).
-pub fn load_body(path: Option<&Path>) -> Result<BodyModel, DataError> {
-    match path {
-        Some(p) => BodyModel::load(p).map_err(|source| DataError::Body {
-            what: format!("model {}", p.display()),
-            source: Box::new(source),
-        }),
-        None => weft_body::default_body().map_err(|source| DataError::Body {
-            what: "model (weft's default body)".into(),
-            source: Box::new(source),
-        }),
-    }
-}
-
 /// Generates (or resumes) the dataset of `config` in `out`.
 pub fn generate(
     config: &DataConfig,
@@ -217,7 +203,11 @@ pub fn generate(
     progress: &dyn Progress,
 ) -> Result<GenerateReport, DataError> {
     config.validate()?;
-    let model = load_body(config.body.as_deref())?;
+    let model =
+        BodyModel::load_or_default(config.body.as_deref()).map_err(|source| DataError::Body {
+            what: "model".into(),
+            source: Box::new(source),
+        })?;
     let mut manifest = plan(config, model.num_betas(), model.source())?;
     manifest.job = options.job;
     for sub in ["", "garments", "shards", "stats"] {

@@ -37,8 +37,8 @@ pub const POSE_VALUES: usize = 72;
 pub struct ShardData {
     /// `[T][N]` garment vertex positions.
     pub positions: Vec<Vec<[f32; 3]>>,
-    /// `[T]` poses.
-    pub poses: Vec<[f32; POSE_VALUES]>,
+    /// `[T]` poses (stored flat as `[T, 72]`).
+    pub poses: Vec<weft_body::Pose>,
     /// `[T]` root translations.
     pub trans: Vec<[f32; 3]>,
     /// `[B]` shape β.
@@ -142,7 +142,7 @@ pub fn encode(sequence_id: &str, data: &ShardData) -> Result<Vec<u8>, DataError>
         ),
         (
             "poses",
-            f32_tensor(vec![t, POSE_VALUES], data.poses.iter().flatten()),
+            f32_tensor(vec![t, POSE_VALUES], data.poses.iter().flatten().flatten()),
         ),
         ("trans", f32_tensor(vec![t, 3], data.trans.iter().flatten())),
         ("betas", f32_tensor(vec![s.betas], data.betas.iter())),
@@ -282,11 +282,7 @@ pub fn decode(path: &Path, bytes: &[u8], expected: ShardShape) -> Result<ShardDa
     let pose_values: Vec<f32> = f32s(poses_b).collect();
     let poses = pose_values
         .chunks_exact(POSE_VALUES)
-        .map(|c| {
-            let mut p = [0.0f32; POSE_VALUES];
-            p.copy_from_slice(c);
-            p
-        })
+        .map(|c| std::array::from_fn(|j| [c[3 * j], c[3 * j + 1], c[3 * j + 2]]))
         .collect();
     let face_values: Vec<u32> = faces_b
         .chunks_exact(4)
@@ -334,7 +330,7 @@ mod tests {
                 vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.5]],
                 vec![[0.0, -0.1, 0.0], [1.0, -0.1, 0.0], [0.0, 0.9, 0.5]],
             ],
-            poses: vec![[0.1; POSE_VALUES], [0.2; POSE_VALUES]],
+            poses: vec![[[0.1; 3]; 24], [[0.2; 3]; 24]],
             trans: vec![[0.0, 0.9, 0.0], [0.0, 0.9, 0.1]],
             betas: vec![1.0, -0.5, 0.0],
             rest_positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.5]],

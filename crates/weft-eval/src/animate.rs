@@ -8,13 +8,13 @@
 use std::path::Path;
 
 use weft_body::BodyModel;
+use weft_body::PosedSequence;
 use weft_mesh::export::gltf::{write_glb, GlbMesh, GlbOptions, BODY_COLOR, GARMENT_COLOR};
 use weft_mesh::export::{export, ExportFormat, Frames};
 use weft_mesh::TriMesh;
-use weft_models::multilevel::Predictor;
+use weft_models::{Clip, Deformer};
 use weft_motion::{generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams};
 
-use crate::baseline::PosedBodies;
 use crate::error::EvalError;
 
 /// Where a motion comes from.
@@ -97,39 +97,21 @@ impl MotionSpec {
 /// A body to export with the garment: its faces and its vertices per frame.
 pub type BodyFrames<'a> = (&'a [[u32; 3]], &'a [Vec<[f32; 3]>]);
 
-/// A motion's poses as SMPL's flat 72 numbers per frame.
-pub fn flat_poses(motion: &Motion) -> Vec<[f32; 72]> {
-    motion
-        .poses()
-        .iter()
-        .map(|p| {
-            let mut out = [0.0f32; 72];
-            for (j, r) in p.iter().enumerate() {
-                out[3 * j..3 * j + 3].copy_from_slice(r);
-            }
-            out
-        })
-        .collect()
-}
-
-/// The garment animated by `predictor` on `body` at `betas` through `motion`.
+/// The garment animated by `deformer` on `body` at `betas` through `motion`.
 pub fn animate(
-    predictor: &Predictor,
+    deformer: &dyn Deformer,
     garment: &TriMesh,
     body: &BodyModel,
     betas: &[f32],
     motion: &Motion,
 ) -> Result<Vec<Vec<[f32; 3]>>, EvalError> {
-    predictor
-        .animate(
-            garment,
-            body,
-            betas,
-            &flat_poses(motion),
-            motion.trans(),
-            motion.fps(),
-        )
-        .map_err(|e| EvalError::Network(e.to_string()))
+    let clip = Clip {
+        betas,
+        poses: motion.poses(),
+        trans: motion.trans(),
+        fps: motion.fps(),
+    };
+    Ok(deformer.animate(garment, body, &clip)?)
 }
 
 /// A post-process for predicted frames: every vertex inside the posed body, or closer
@@ -139,7 +121,7 @@ pub fn animate(
 /// vertices moved over all frames. `posed` holds the body at each of the frames.
 pub fn push_out_of_body(
     frames: &mut [Vec<[f32; 3]>],
-    posed: &PosedBodies,
+    posed: &PosedSequence,
     margin: f64,
 ) -> Result<usize, EvalError> {
     if posed.len() != frames.len() {
@@ -215,7 +197,6 @@ mod tests {
         let m = MotionSpec::parse("walk", 12, 3, 30.0).unwrap();
         let motion = m.load(&body, &[]).unwrap();
         assert_eq!(motion.frame_count(), 12);
-        assert_eq!(flat_poses(&motion).len(), 12);
         assert!(MotionSpec::parse("no-such-motion-or-file", 12, 0, 30.0).is_err());
         assert!(MotionSpec::parse("walk", 0, 0, 30.0)
             .unwrap()
@@ -228,7 +209,7 @@ mod tests {
         let body = weft_body::default_body().unwrap();
         let pelvis = body.joints(&vec![0.0; body.num_betas()]).unwrap()[0];
         let trans = [[0.0f32; 3], [0.0, 0.3, 0.0]];
-        let posed = PosedBodies::new(&body, &[], &[[0.0; 72]; 2], &trans).unwrap();
+        let posed = PosedSequence::new(&body, &[], &[[[0.0f32; 3]; 24]; 2], &trans).unwrap();
         let far = [0.0f32, 0.0, 2.0];
         // The pelvis joint is inside the body in both frames, the far point outside.
         let mut frames: Vec<Vec<[f32; 3]>> = trans

@@ -19,19 +19,25 @@ pub enum EvalError {
     #[error("{0}")]
     Invalid(String),
     /// A body query failed (empty or non-finite body).
-    #[error("body query: {0}")]
+    #[error(transparent)]
     Query(#[from] weft_body::query::QueryError),
     /// A body model operation failed.
-    #[error("body: {0}")]
+    #[error(transparent)]
     Body(#[from] weft_body::BodyError),
     /// A body feature (weight transfer) failed.
-    #[error("skinning weight transfer: {0}")]
+    #[error(transparent)]
     Feature(#[from] weft_body::features::FeatureError),
     /// A picture or report could not be drawn or written.
-    #[error("picture: {0}")]
+    #[error(transparent)]
     Render(#[from] weft_render::RenderError),
+    /// A deformer (a model or a baseline) refused its input or failed.
+    #[error(transparent)]
+    Model(#[from] weft_models::ModelError),
+    /// The dataset could not be read.
+    #[error(transparent)]
+    Data(#[from] weft_data::DataError),
     /// A file could not be read or written.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: cannot read or write the file", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -39,7 +45,7 @@ pub enum EvalError {
         source: std::io::Error,
     },
     /// A JSON file is not what was expected.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: not the JSON expected", path.display())]
     Json {
         /// The file.
         path: PathBuf,

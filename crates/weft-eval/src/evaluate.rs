@@ -1,30 +1,28 @@
-//! `weft eval`: a trained run against the simulated ground truth of a dataset split,
-//! next to the LBS-only baseline, with inference speed and a report.
+//! `weft eval`: any list of deformers (a trained run's model, other runs, the LBS and
+//! DQS baselines) against the simulated ground truth of a dataset split, in one loop,
+//! with inference speed and a report.
 //!
-//! Every sequence of the split is animated by the model (through the same
-//! [`Predictor::animate`] users call, so what is measured is what ships) and by the
-//! baseline; both are scored frame by frame into per-garment-kind accumulators
-//! ([`FrameMetrics`]). Speed is timed separately on the first sequence with the pair
-//! encoding computed once, as seed 000 reports it: windows of 1 and 16 frames per forward
-//! pass, network alone and with the per-frame inputs.
+//! Every sequence of the split is animated by each method through the same
+//! [`Deformer::animate`] users call (so what is measured is what ships), and scored frame
+//! by frame into per-garment-kind accumulators ([`FrameMetrics`]). Speed is timed on the
+//! first sequence the way each method is meant to run ([`Deformer::time`]; for
+//! Multilevel: the pair encoding cached, windows of 1 and 16 frames, as seed 000 reports
+//! it).
 
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use weft_body::BodyModel;
+use weft_body::{BodyModel, PosedSequence};
 use weft_data::{Dataset, Sequence, Split};
 use weft_mesh::TriMesh;
-use weft_models::multilevel::{FrameInputs, GarmentInput, Predictor};
+use weft_models::{Clip, Deformer, Frames};
 use weft_render::{Colormap, Report};
 
-use crate::baseline::{LbsBaseline, PosedBodies};
 use crate::error::EvalError;
 use crate::metrics::{vertex_errors_mm, FrameMetrics, GarmentTopology};
 use crate::pictures::{comparison_sheet, heat_map, per_frame_plot, MethodFrames, ERROR_LABEL};
-use crate::report::{
-    pooling_label, write_text, EvalReport, FpsResult, MethodResult, LBS_NAME, REPORT_VERSION,
-};
+use crate::report::{write_text, EvalReport, MethodResult, REPORT_VERSION};
 
 /// What to evaluate and how much.
 #[derive(Clone, Debug)]
@@ -66,11 +64,9 @@ pub struct Example {
     /// Faces of the garment.
     pub faces: Vec<[u32; 3]>,
     /// Simulated frames.
-    pub truth: Vec<Vec<[f32; 3]>>,
-    /// The model's frames.
-    pub model: Vec<Vec<[f32; 3]>>,
-    /// The baseline's frames.
-    pub lbs: Vec<Vec<[f32; 3]>>,
+    pub truth: Frames,
+    /// Each method's frames, in the order of the methods.
+    pub methods: Vec<(String, Frames)>,
     /// The posed body per frame.
     pub bodies: Vec<TriMesh>,
 }
@@ -92,41 +88,37 @@ impl ByKind {
         self.0.entry(kind.to_owned()).or_default()
     }
 
-    fn result(&self, name: &str) -> MethodResult {
+    fn result(&self, method: &dyn Deformer, fps: Vec<weft_models::Timing>) -> MethodResult {
         let mut overall = FrameMetrics::new();
         for m in self.0.values() {
             overall.merge(m);
         }
         MethodResult {
-            name: name.to_owned(),
+            name: method.name(),
+            model: method.kind().map(|k| k.name().to_owned()),
+            variant: method.variant(),
             overall: overall.summary(),
             per_kind: self
                 .0
                 .iter()
                 .map(|(k, m)| (k.clone(), m.summary()))
                 .collect(),
+            fps,
         }
     }
 }
 
-fn model_err(e: weft_models::ModelError) -> EvalError {
-    EvalError::Network(e.to_string())
-}
-
-fn data_err(e: weft_data::DataError) -> EvalError {
-    EvalError::Invalid(format!("dataset: {e}"))
-}
-
-/// Evaluates `predictor` (the run at `run_dir`) on `opts.split` of `dataset`, reporting
-/// progress through `progress` (one line per sequence).
+/// Evaluates `methods` (the first is the run's model, named by `run_dir`) on
+/// `opts.split` of `dataset`, reporting progress through `progress` (one line per
+/// sequence).
 pub fn evaluate(
-    predictor: &Predictor,
+    methods: &[&dyn Deformer],
     run_dir: &Path,
     dataset: &Dataset,
     opts: &EvalOptions,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Evaluation, EvalError> {
-    let body = dataset.body_model().map_err(data_err)?;
+    let body = dataset.body_model()?;
     let mut records = dataset.records_in(opts.split);
     if records.is_empty() {
         return Err(EvalError::Invalid(format!(
@@ -136,23 +128,34 @@ pub fn evaluate(
         )));
     }
     if let Some(k) = opts.max_sequences {
-        records.truncate(k.max(1));
+        if k == 0 {
+            return Err(EvalError::Invalid(
+                "at most 0 sequences: nothing to evaluate (give at least 1)".to_owned(),
+            ));
+        }
+        records.truncate(k);
     }
     let total = records.len();
-    let mut ev = Evaluator::new(predictor, &body, opts);
+    let mut ev = Evaluator::new(methods, &body, opts)?;
     for (k, record) in records.iter().enumerate() {
         let started = Instant::now();
-        let seq = dataset.load(record).map_err(data_err)?;
+        let seq = dataset.load(record)?;
         let (id, kind, vertices, frames) = (
             seq.record.id.clone(),
             seq.record.garment_kind.clone(),
             seq.record.vertices,
             seq.positions.len(),
         );
-        let (m, l) = ev.add(seq)?;
+        let means = ev.add(seq)?;
+        let errors: Vec<String> = methods
+            .iter()
+            .zip(&means)
+            .map(|(m, e)| format!("{} {e:.2} mm", m.name()))
+            .collect();
         progress(&format!(
-            "[{}/{total}] {id} ({kind}, {vertices} vertices, {frames} frames): E_verts {m:.2} mm, LBS {l:.2} mm ({:.1} s)",
+            "[{}/{total}] {id} ({kind}, {vertices} vertices, {frames} frames): E_verts {} ({:.1} s)",
             k + 1,
+            errors.join(", "),
             started.elapsed().as_secs_f64()
         ));
     }
@@ -165,37 +168,53 @@ pub fn evaluate(
 /// Scores sequences one at a time (the loop of [`evaluate`], usable on sequences built in
 /// memory).
 pub struct Evaluator<'a> {
-    predictor: &'a Predictor,
+    methods: &'a [&'a dyn Deformer],
     body: &'a BodyModel,
     opts: &'a EvalOptions,
-    model: ByKind,
-    lbs: ByKind,
+    scores: Vec<ByKind>,
+    fps: Vec<Vec<weft_models::Timing>>,
     example: Option<Example>,
     frames: u64,
     sequences: usize,
-    fps: Vec<FpsResult>,
 }
 
 impl<'a> Evaluator<'a> {
-    /// Nothing scored yet.
-    pub fn new(predictor: &'a Predictor, body: &'a BodyModel, opts: &'a EvalOptions) -> Self {
-        Evaluator {
-            predictor,
+    /// Nothing scored yet; `methods` must not be empty, and their names must differ (the
+    /// report and the pictures tell them apart by name).
+    pub fn new(
+        methods: &'a [&'a dyn Deformer],
+        body: &'a BodyModel,
+        opts: &'a EvalOptions,
+    ) -> Result<Self, EvalError> {
+        if methods.is_empty() {
+            return Err(EvalError::Invalid(
+                "nothing to evaluate: give at least one method".to_owned(),
+            ));
+        }
+        let mut names: Vec<String> = methods.iter().map(|m| m.name()).collect();
+        names.sort();
+        if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+            return Err(EvalError::Invalid(format!(
+                "two methods are both named {:?}; evaluate each once",
+                w[0]
+            )));
+        }
+        Ok(Evaluator {
+            methods,
             body,
             opts,
-            model: ByKind::default(),
-            lbs: ByKind::default(),
+            scores: methods.iter().map(|_| ByKind::default()).collect(),
+            fps: methods.iter().map(|_| Vec::new()).collect(),
             example: None,
             frames: 0,
             sequences: 0,
-            fps: Vec::new(),
-        }
+        })
     }
 
-    /// Animates `seq` with the model and the baseline and scores both against its
-    /// simulated frames; times inference on the first sequence. Returns the mean vertex
-    /// errors (mm) of the model and of the baseline on this sequence.
-    pub fn add(&mut self, mut seq: Sequence) -> Result<(f64, f64), EvalError> {
+    /// Animates `seq` with every method and scores each against its simulated frames;
+    /// times inference on the first sequence. Returns each method's mean vertex error
+    /// (mm) on this sequence.
+    pub fn add(&mut self, mut seq: Sequence) -> Result<Vec<f64>, EvalError> {
         let body = self.body;
         if seq.positions.is_empty() || seq.positions.len() > seq.poses.len() {
             return Err(EvalError::Count {
@@ -204,26 +223,25 @@ impl<'a> Evaluator<'a> {
                 found: seq.positions.len(),
             });
         }
-        // A diverged sequence keeps the frames before the divergence: score those (the
-        // model never looks ahead, so the cut motion gives the same predictions).
+        // A diverged sequence keeps the frames before the divergence: score those (no
+        // method looks ahead, so the cut motion gives the same predictions).
         seq.poses.truncate(seq.positions.len());
         seq.trans.truncate(seq.positions.len());
-        let betas = &seq.record.betas;
-        let predicted = self
-            .predictor
-            .animate(
-                &seq.garment,
-                body,
-                betas,
-                &seq.poses,
-                &seq.trans,
-                seq.record.fps,
-            )
-            .map_err(model_err)?;
-        let lbs =
-            LbsBaseline::new(&seq.garment, body, betas)?.animate(body, &seq.poses, &seq.trans)?;
+        let clip = Clip {
+            betas: &seq.record.betas,
+            poses: &seq.poses,
+            trans: &seq.trans,
+            fps: seq.record.fps,
+        };
+        let predicted: Vec<Frames> = self
+            .methods
+            .iter()
+            .map(|m| m.animate(&seq.garment, body, &clip))
+            .collect::<Result<_, _>>()?;
         let bodies = if self.opts.collisions || self.example.is_none() {
-            Some(PosedBodies::new(body, betas, &seq.poses, &seq.trans)?)
+            Some(PosedSequence::new(
+                body, clip.betas, clip.poses, clip.trans,
+            )?)
         } else {
             None
         };
@@ -234,28 +252,31 @@ impl<'a> Evaluator<'a> {
                 (Some(b), true) => Some(b.surface(t)?),
                 _ => None,
             };
-            self.model
-                .get(&kind)
-                .push_frame(&topology, &predicted[t], truth, surface.as_ref())?;
-            self.lbs
-                .get(&kind)
-                .push_frame(&topology, &lbs[t], truth, surface.as_ref())?;
+            for (scores, frames) in self.scores.iter_mut().zip(&predicted) {
+                scores
+                    .get(&kind)
+                    .push_frame(&topology, &frames[t], truth, surface.as_ref())?;
+            }
             self.frames += 1;
         }
         if self.sequences == 0 && !self.opts.fps_batches.is_empty() {
-            self.fps = time_inference(
-                self.predictor,
-                body,
-                &seq,
-                &self.opts.fps_batches,
-                self.opts.fps_frames,
-            )?;
+            for (m, fps) in self.methods.iter().zip(&mut self.fps) {
+                *fps = m
+                    .time(
+                        &seq.garment,
+                        body,
+                        &clip,
+                        &self.opts.fps_batches,
+                        self.opts.fps_frames,
+                    )?
+                    .unwrap_or_default();
+            }
         }
         self.sequences += 1;
-        let means = (
-            vertex_mean(&predicted, &seq.positions)?,
-            vertex_mean(&lbs, &seq.positions)?,
-        );
+        let means = predicted
+            .iter()
+            .map(|p| vertex_mean(p, &seq.positions))
+            .collect::<Result<Vec<f64>, _>>()?;
         if self.example.is_none() {
             if let Some(bodies) = bodies {
                 self.example = Some(Example {
@@ -264,8 +285,12 @@ impl<'a> Evaluator<'a> {
                     faces: seq.garment.faces.clone(),
                     bodies: (0..bodies.len()).filter_map(|t| bodies.mesh(t)).collect(),
                     truth: seq.positions,
-                    model: predicted,
-                    lbs,
+                    methods: self
+                        .methods
+                        .iter()
+                        .map(|m| m.name())
+                        .zip(predicted)
+                        .collect(),
                 });
             }
         }
@@ -274,20 +299,21 @@ impl<'a> Evaluator<'a> {
 
     /// The report of everything added; `run` and `data` name the run and dataset.
     pub fn finish(self, run: &str, data: &str) -> Evaluation {
-        let cfg = self.predictor.config();
-        let model_name = pooling_label(cfg.pooling.name());
+        let methods = self
+            .methods
+            .iter()
+            .zip(&self.scores)
+            .zip(self.fps)
+            .map(|((m, s), fps)| s.result(*m, fps))
+            .collect();
         let report = EvalReport {
             version: REPORT_VERSION,
             run: run.to_owned(),
             data: data.to_owned(),
             split: self.opts.split.name().to_owned(),
-            preset: cfg.preset.clone(),
-            pooling: cfg.pooling.name().to_owned(),
-            checkpoint: self.predictor.checkpoint().display().to_string(),
             sequences: self.sequences,
             frames: self.frames,
-            methods: vec![self.model.result(&model_name), self.lbs.result(LBS_NAME)],
-            fps: self.fps,
+            methods,
             command: self.opts.command.clone(),
         };
         Evaluation {
@@ -324,75 +350,6 @@ pub fn per_frame_means(
         .collect()
 }
 
-/// Frames per second of `predictor` on `seq`'s garment and motion, per batch size: the
-/// pair encoded once, then windows of `batch` frames.
-pub fn time_inference(
-    predictor: &Predictor,
-    body: &BodyModel,
-    seq: &Sequence,
-    batches: &[usize],
-    frames: usize,
-) -> Result<Vec<FpsResult>, EvalError> {
-    let cfg = predictor.config();
-    let model = predictor.model();
-    let betas = &seq.record.betas;
-    let g = GarmentInput::new(&seq.garment, body, betas, cfg).map_err(model_err)?;
-    let pair = model.encode_pair(&g).map_err(model_err)?;
-    let total = seq.poses.len();
-    let mut out = Vec::new();
-    for &batch in batches {
-        let batch = batch.clamp(1, total);
-        let windows: Vec<std::ops::Range<usize>> = (0..frames.max(batch))
-            .step_by(batch)
-            .map(|a| {
-                let a = a % total;
-                a..(a + batch).min(total)
-            })
-            .collect();
-        // One untimed window: first-use allocations and the cached frame batch.
-        let warm = FrameInputs::new(
-            body,
-            betas,
-            &seq.poses,
-            &seq.trans,
-            seq.record.fps,
-            windows[0].clone(),
-            cfg,
-        )
-        .map_err(model_err)?;
-        model.forward(&pair, &g, &warm).map_err(model_err)?;
-        let (mut inputs_s, mut network_s, mut timed) = (0.0, 0.0, 0usize);
-        for w in windows {
-            let t0 = Instant::now();
-            let f = FrameInputs::new(
-                body,
-                betas,
-                &seq.poses,
-                &seq.trans,
-                seq.record.fps,
-                w.clone(),
-                cfg,
-            )
-            .map_err(model_err)?;
-            let t1 = Instant::now();
-            let p = model.forward(&pair, &g, &f).map_err(model_err)?;
-            // Reading the result back is part of inference (it synchronises the device).
-            let _ = p.vertices.into_data();
-            network_s += t1.elapsed().as_secs_f64();
-            inputs_s += (t1 - t0).as_secs_f64();
-            timed += w.len();
-        }
-        out.push(FpsResult {
-            batch,
-            vertices: g.vertex_count(),
-            network_fps: timed as f64 / network_s.max(1e-12),
-            end_to_end_fps: timed as f64 / (network_s + inputs_s).max(1e-12),
-            frames: timed,
-        });
-    }
-    Ok(out)
-}
-
 /// Frames to draw: start, middle and end of the sequence (fewer for short ones).
 fn picture_frames(count: usize) -> Vec<usize> {
     let mut f = vec![0, count / 2, count.saturating_sub(1)];
@@ -402,12 +359,12 @@ fn picture_frames(count: usize) -> Vec<usize> {
 
 /// The error table and, when timed, the speed table of `r` as HTML sections (the
 /// evaluation report and the demo report show the same two).
-pub(crate) fn error_and_speed_tables(r: &EvalReport, html: &mut Report) {
+pub fn error_and_speed_tables(r: &EvalReport, html: &mut Report) {
     html.heading("Errors against the simulated ground truth");
     let (h, rows) = r.table();
     html.table(h, rows);
-    if !r.fps.is_empty() {
-        html.heading("Inference speed (pair encoding cached)");
+    if r.timed() {
+        html.heading("Inference speed");
         let (h, rows) = r.fps_table();
         html.table(h, rows);
     }
@@ -425,8 +382,12 @@ pub fn write_report(eval: &Evaluation, dir: &Path) -> Result<std::path::PathBuf,
     write_text(&dir.join("eval.md"), &r.to_markdown())?;
     let mut html = Report::new(format!("weft evaluation: {}", r.run));
     html.paragraph(format!(
-        "Split {} of {}: {} sequences, {} frames. Model: preset {}, pooling {}, checkpoint {}.",
-        r.split, r.data, r.sequences, r.frames, r.preset, r.pooling, r.checkpoint
+        "Split {} of {}: {} sequences, {} frames. Methods: {}.",
+        r.split,
+        r.data,
+        r.sequences,
+        r.frames,
+        r.methods_line()
     ));
     if let Some(x) = r.reduction_vs_lbs() {
         html.paragraph(format!(
@@ -437,35 +398,41 @@ pub fn write_report(eval: &Evaluation, dir: &Path) -> Result<std::path::PathBuf,
     }
     error_and_speed_tables(r, &mut html);
     if let Some(ex) = &eval.example {
-        let model_name = r.model().map_or("model", |m| m.name.as_str());
+        let (model_name, model_frames) = match ex.methods.first() {
+            Some((name, frames)) => (name.as_str(), frames),
+            None => return Err(EvalError::Invalid("no method to draw".to_owned())),
+        };
         html.heading(format!("Sequence {} ({})", ex.id, ex.kind));
         let frames = picture_frames(ex.truth.len());
+        let columns: Vec<MethodFrames> = ex
+            .methods
+            .iter()
+            .map(|(name, frames)| MethodFrames { name, frames })
+            .collect();
+        let names: Vec<&str> = ex.methods.iter().map(|(n, _)| n.as_str()).collect();
         let sheet = comparison_sheet(
             &ex.faces,
             &ex.truth,
-            &[
-                MethodFrames {
-                    name: model_name,
-                    frames: &ex.model,
-                },
-                MethodFrames {
-                    name: LBS_NAME,
-                    frames: &ex.lbs,
-                },
-            ],
+            &columns,
             Some(&ex.bodies),
             &frames,
             360,
-            "ground truth | model | LBS only",
+            &format!("ground truth | {}", names.join(" | ")),
         )?;
         sheet.write_png(&dir.join("comparison.png"))?;
         html.image(
             &sheet,
-            "Rows: frames; columns: simulated ground truth, the model, the LBS-only baseline; colour: vertex error (mm), one scale for all tiles.",
+            format!(
+                "Rows: frames; columns: simulated ground truth, then {}; colour: vertex error (mm), one scale for all tiles.",
+                names.join(", ")
+            ),
         )?;
         let last = ex.truth.len().saturating_sub(1);
-        let err = vertex_errors_mm(&ex.model[last], &ex.truth[last])?;
-        let pos: Vec<[f64; 3]> = ex.model[last].iter().map(|p| p.map(f64::from)).collect();
+        let err = vertex_errors_mm(&model_frames[last], &ex.truth[last])?;
+        let pos: Vec<[f64; 3]> = model_frames[last]
+            .iter()
+            .map(|p| p.map(f64::from))
+            .collect();
         let map = heat_map(
             &pos,
             &ex.faces,
@@ -477,14 +444,16 @@ pub fn write_report(eval: &Evaluation, dir: &Path) -> Result<std::path::PathBuf,
             &format!("{model_name}: vertex error, frame {last}"),
         )?;
         map.write_png(&dir.join("error_map.png"))?;
-        html.image(&map, "The model's vertex error on the last frame.")?;
-        let plot = per_frame_plot(
-            &[
-                (model_name, per_frame_means(&ex.model, &ex.truth)?),
-                (LBS_NAME, per_frame_means(&ex.lbs, &ex.truth)?),
-            ],
-            &format!("mean vertex error per frame, {}", ex.id),
+        html.image(
+            &map,
+            format!("{model_name}: vertex error on the last frame."),
         )?;
+        let curves = ex
+            .methods
+            .iter()
+            .map(|(name, frames)| Ok((name.as_str(), per_frame_means(frames, &ex.truth)?)))
+            .collect::<Result<Vec<_>, EvalError>>()?;
+        let plot = per_frame_plot(&curves, &format!("mean vertex error per frame, {}", ex.id))?;
         plot.write_png(&dir.join("per_frame.png"))?;
         html.image(&plot, "Mean vertex error per frame.")?;
     }

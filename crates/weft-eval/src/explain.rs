@@ -13,6 +13,7 @@ use burn::tensor::Tensor;
 use weft_body::BodyModel;
 use weft_mesh::TriMesh;
 use weft_models::multilevel::{FrameInputs, GarmentInput, Multilevel};
+use weft_models::Clip;
 use weft_nn::burn;
 
 use crate::attribution::{attribute, tensor2, Attribution};
@@ -33,10 +34,6 @@ pub struct VertexAttribution {
     pub direction: [f32; 3],
 }
 
-fn model_err(e: weft_models::ModelError) -> EvalError {
-    EvalError::Network(e.to_string())
-}
-
 /// The vertices `[T, N, 3]` of a prediction for frame `k` of the window.
 fn frame_vertices(v: Tensor<3>, k: usize) -> Result<Vec<[f32; 3]>, EvalError> {
     let [_, n, _] = v.dims();
@@ -49,21 +46,18 @@ fn frame_vertices(v: Tensor<3>, k: usize) -> Result<Vec<[f32; 3]>, EvalError> {
     Ok(data.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
 }
 
-/// Eq. 9 for vertex `vertex` at frame `frame` of the motion `poses`/`trans`, with `model`
-/// on an autodiff device and `samples` Gauss–Legendre nodes.
-#[allow(clippy::too_many_arguments)]
+/// Eq. 9 for vertex `vertex` at frame `frame` of `clip`, with `model` on an autodiff
+/// device and `samples` Gauss–Legendre nodes.
 pub fn explain_vertex(
     model: &Multilevel,
     garment: &TriMesh,
     body: &BodyModel,
-    betas: &[f32],
-    poses: &[[f32; 72]],
-    trans: &[[f32; 3]],
-    fps: f64,
+    clip: &Clip,
     vertex: usize,
     frame: usize,
     samples: usize,
 ) -> Result<VertexAttribution, EvalError> {
+    let poses = clip.poses;
     let n = garment.vertex_count();
     if vertex >= n {
         return Err(EvalError::Invalid(format!(
@@ -80,14 +74,13 @@ pub fn explain_vertex(
     }
     let cfg = model.config();
     let device = model.device();
-    let g = GarmentInput::new(garment, body, betas, cfg).map_err(model_err)?;
-    let f = FrameInputs::new(body, betas, poses, trans, fps, frame..frame + 1, cfg)
-        .map_err(model_err)?;
+    let g = GarmentInput::new(garment, body, clip.betas, cfg)?;
+    let f = FrameInputs::new(body, clip, frame..frame + 1, cfg)?;
     let width = cfg.node_features();
     let x = tensor2(&g.node_features, [n, width], &device)?;
     let predicted = {
-        let pair = model.encode_pair(&g).map_err(model_err)?;
-        frame_vertices(model.forward(&pair, &g, &f).map_err(model_err)?.vertices, 0)?
+        let pair = model.encode_pair(&g)?;
+        frame_vertices(model.forward(&pair, &g, &f)?.vertices, 0)?
     };
     let rest = garment.positions[vertex];
     let p = predicted[vertex];
@@ -100,8 +93,8 @@ pub fn explain_vertex(
     };
     let dir = Tensor::<1>::from_floats(direction, &device);
     let attribution = attribute(&x, None, samples, |x| {
-        let pair = model.encode_pair_features(&g, x).map_err(model_err)?;
-        let v = model.forward(&pair, &g, &f).map_err(model_err)?.vertices;
+        let pair = model.encode_pair_features(&g, x)?;
+        let v = model.forward(&pair, &g, &f)?.vertices;
         let row = v.slice([0..1, vertex..vertex + 1, 0..3]).reshape([3]);
         Ok((row * dir.clone()).sum())
     })?;

@@ -1,13 +1,12 @@
-//! Evaluation for weft (seed 000 §4): how far a model's garments are from the simulated
-//! ground truth, compared with the no-learning LBS baseline and with the other pooling
-//! variants of Table 1, and why a vertex moves the way it does (attribution, §4.1).
+//! Evaluation for weft (seed 000 §4): how far any list of deformers (learned systems and
+//! the no-learning LBS/DQS baselines of weft-models) puts garments from the simulated
+//! ground truth, side by side, and why a vertex moves the way it does (attribution,
+//! §4.1).
 //!
 //! - [`metrics`]: `E_verts` (mm), `E_norm` (°), collision rate, edge strain.
-//! - [`baseline`]: the LBS-only baseline (transferred body skinning weights).
-//! - [`evaluate`]: `weft eval` — a run on a dataset split against the baseline.
+//! - [`evaluate`]: `weft eval` — deformers on a dataset split in one loop.
 //! - [`explain`]: eq. 9 for one vertex of the Multilevel model (`weft attribute`).
 //! - [`animate`]: `weft animate` — any garment, shape and motion, exported.
-//! - [`demo`]: `weft demo` — data, training, evaluation, animation, attribution.
 //! - [`report`]: `eval.json` / `eval.md` and the Table 1 comparison.
 //! - [`pictures`]: comparison sheets, error and attribution heat maps, per-frame plots.
 //! - [`stats`]: mean ± std in one pass.
@@ -16,8 +15,6 @@
 
 pub mod animate;
 pub mod attribution;
-pub mod baseline;
-pub mod demo;
 pub mod error;
 pub mod evaluate;
 pub mod explain;
@@ -27,7 +24,6 @@ pub mod quadrature;
 pub mod report;
 pub mod stats;
 
-pub use baseline::{LbsBaseline, PosedBodies};
 pub use error::EvalError;
 pub use evaluate::{evaluate, write_report, EvalOptions, Evaluation};
 pub use metrics::{FrameMetrics, GarmentTopology, MetricsSummary};

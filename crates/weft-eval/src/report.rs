@@ -11,40 +11,32 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use weft_models::Timing;
+
 use crate::error::EvalError;
 use crate::metrics::MetricsSummary;
 
 /// Version of the `eval.json` layout.
-pub const REPORT_VERSION: u32 = 1;
+pub const REPORT_VERSION: u32 = 2;
 
-/// Name of the LBS-only baseline in reports.
-pub const LBS_NAME: &str = "LBS only";
+pub use weft_models::LBS_NAME;
 
 /// One method's figures on the evaluated split.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MethodResult {
-    /// Display name ("Multilevel (structure)", "LBS only").
+    /// Display name ("Multilevel (structure-preserving)", "LBS only").
     pub name: String,
+    /// The learned system (`multilevel`, `hood`, …); absent for a baseline.
+    pub model: Option<String>,
+    /// Its variant settings (preset, pooling, checkpoint; skinning for a baseline).
+    pub variant: BTreeMap<String, String>,
     /// Over every evaluated frame.
     pub overall: MetricsSummary,
     /// Per garment kind (skirt, dress, …).
     pub per_kind: BTreeMap<String, MetricsSummary>,
-}
-
-/// Inference speed at one batch size (frames per forward pass), pair encoding cached.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FpsResult {
-    /// Frames per forward pass.
-    pub batch: usize,
-    /// Garment vertices of the timed garment.
-    pub vertices: usize,
-    /// Frames per second of the network alone (forward pass + LBS, inputs ready).
-    pub network_fps: f64,
-    /// Frames per second including the per-frame inputs (pose history, body
-    /// velocities, joint transforms).
-    pub end_to_end_fps: f64,
-    /// Frames timed.
-    pub frames: usize,
+    /// Inference speed per batch size (timed on the first sequence; empty when the
+    /// method has nothing to time apart from animating).
+    pub fps: Vec<Timing>,
 }
 
 /// Everything `weft eval` measured on one run.
@@ -58,20 +50,12 @@ pub struct EvalReport {
     pub data: String,
     /// The split evaluated.
     pub split: String,
-    /// Model preset.
-    pub preset: String,
-    /// Pooling of M^mp (`structure`, `none`, `topk`, `sag`, `asap`).
-    pub pooling: String,
-    /// The checkpoint evaluated.
-    pub checkpoint: String,
     /// Sequences evaluated.
     pub sequences: usize,
     /// Frames evaluated (per method).
     pub frames: u64,
-    /// The model first, then the baselines.
+    /// The evaluated run's model first, then the other methods in the order given.
     pub methods: Vec<MethodResult>,
-    /// Inference speed of the model.
-    pub fps: Vec<FpsResult>,
     /// The command that reproduces this report.
     pub command: String,
 }
@@ -170,9 +154,10 @@ impl EvalReport {
         (header, rows)
     }
 
-    /// Header and rows of the speed table.
+    /// Header and rows of the speed table: one row per timed method and batch size.
     pub fn fps_table(&self) -> (Vec<String>, Vec<Vec<String>>) {
         let header = [
+            "method",
             "batch (frames per pass)",
             "vertices",
             "network fps",
@@ -182,10 +167,12 @@ impl EvalReport {
         .map(String::from)
         .to_vec();
         let rows = self
-            .fps
+            .methods
             .iter()
-            .map(|f| {
+            .flat_map(|m| m.fps.iter().map(move |f| (m, f)))
+            .map(|(m, f)| {
                 vec![
+                    m.name.clone(),
                     f.batch.to_string(),
                     f.vertices.to_string(),
                     format!("{:.1}", f.network_fps),
@@ -197,14 +184,39 @@ impl EvalReport {
         (header, rows)
     }
 
+    /// Whether any method was timed.
+    pub fn timed(&self) -> bool {
+        self.methods.iter().any(|m| !m.fps.is_empty())
+    }
+
+    /// One line naming each method with its model kind and variant settings.
+    pub fn methods_line(&self) -> String {
+        self.methods
+            .iter()
+            .map(|m| {
+                let settings: Vec<String> =
+                    m.variant.iter().map(|(k, v)| format!("{k} {v}")).collect();
+                match &m.model {
+                    Some(kind) => format!("{} ({kind}: {})", m.name, settings.join(", ")),
+                    None => format!("{} ({})", m.name, settings.join(", ")),
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    }
+
     /// The report as Markdown.
     pub fn to_markdown(&self) -> String {
         let mut s = String::new();
         let _ = writeln!(s, "# Evaluation of {}\n", self.run);
         let _ = writeln!(
             s,
-            "Split `{}` of `{}`: {} sequences, {} frames. Model: preset `{}`, pooling `{}`, checkpoint `{}`.\n",
-            self.split, self.data, self.sequences, self.frames, self.preset, self.pooling, self.checkpoint
+            "Split `{}` of `{}`: {} sequences, {} frames. Methods: {}.\n",
+            self.split,
+            self.data,
+            self.sequences,
+            self.frames,
+            self.methods_line()
         );
         if let Some(r) = self.reduction_vs_lbs() {
             let _ = writeln!(
@@ -220,7 +232,7 @@ impl EvalReport {
             s,
             "\nErrors are mean (± std) over every vertex of every frame; E_norm over vertices with a defined normal. Collisions: share of garment vertices inside the posed body.\n"
         );
-        if !self.fps.is_empty() {
+        if self.timed() {
             let _ = writeln!(s, "## Inference speed\n");
             let (h, rows) = self.fps_table();
             markdown_table(&mut s, &h, &rows);
@@ -236,18 +248,22 @@ impl EvalReport {
             path: path.to_path_buf(),
             source,
         })?;
-        let r: EvalReport = serde_json::from_str(&text).map_err(|source| EvalError::Json {
+        let json = |source| EvalError::Json {
             path: path.to_path_buf(),
             source,
-        })?;
-        if r.version != REPORT_VERSION {
+        };
+        // The version first, so that an older report is named as such rather than as a
+        // missing field.
+        let value: serde_json::Value = serde_json::from_str(&text).map_err(json)?;
+        let version = value.get("version").and_then(serde_json::Value::as_u64);
+        if version != Some(u64::from(REPORT_VERSION)) {
             return Err(EvalError::Invalid(format!(
                 "{}: eval.json version {}; this build reads version {REPORT_VERSION} (re-run weft eval)",
                 path.display(),
-                r.version
+                version.map_or("missing".to_string(), |v| v.to_string())
             )));
         }
-        Ok(r)
+        serde_json::from_value(value).map_err(json)
     }
 
     /// Writes the report as pretty JSON, atomically.
@@ -279,26 +295,14 @@ pub fn markdown_table(s: &mut String, header: &[String], rows: &[Vec<String>]) {
     }
 }
 
-/// Table 1: several runs (one per pooling variant) and the LBS baseline on the same
-/// split, per garment kind.
+/// Table 1: several runs (one per pooling variant, or one per system) and the
+/// baselines on the same split, per garment kind.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Comparison {
     /// The runs' reports, in the order given.
     pub reports: Vec<EvalReport>,
     /// The command that reproduces the comparison.
     pub command: String,
-}
-
-/// Display name of a pooling variant, as in Table 1.
-pub fn pooling_label(pooling: &str) -> String {
-    match pooling {
-        "structure" => "Multilevel (structure-preserving)".to_owned(),
-        "none" => "Single-level".to_owned(),
-        "top_k" | "topk" => "TopKPool".to_owned(),
-        "sag" => "SAGPool".to_owned(),
-        "asap" => "ASAP".to_owned(),
-        other => other.to_owned(),
-    }
 }
 
 impl Comparison {
@@ -320,7 +324,7 @@ impl Comparison {
         Ok(Comparison { reports, command })
     }
 
-    /// Header and rows: one row per run plus the LBS baseline (from the first run).
+    /// Header and rows: one row per run (its model) plus the baselines of the first run.
     pub fn table(&self) -> (Vec<String>, Vec<Vec<String>>) {
         let mut kinds: Vec<String> = self.reports.iter().flat_map(|r| r.kinds()).collect();
         kinds.sort();
@@ -361,21 +365,24 @@ impl Comparison {
             row.push(fps);
             row
         };
+        let fps = |m: &MethodResult| {
+            m.fps
+                .iter()
+                .find(|f| f.batch == 1)
+                .map_or("–".to_owned(), |f| format!("{:.1}", f.network_fps))
+        };
         let mut rows: Vec<Vec<String>> = self
             .reports
             .iter()
             .filter_map(|r| {
                 let m = r.model()?;
-                let fps = r
-                    .fps
-                    .iter()
-                    .find(|f| f.batch == 1)
-                    .map_or("–".to_owned(), |f| format!("{:.1}", f.network_fps));
-                Some(row(pooling_label(&r.pooling), &r.run, m, fps))
+                Some(row(m.name.clone(), &r.run, m, fps(m)))
             })
             .collect();
-        if let (Some(l), Some(first)) = (&lbs, self.reports.first()) {
-            rows.push(row(LBS_NAME.to_owned(), &first.run, l, "–".to_owned()));
+        if let Some(first) = self.reports.first() {
+            for b in first.methods.iter().skip(1).filter(|m| m.model.is_none()) {
+                rows.push(row(b.name.clone(), &first.run, b, fps(b)));
+            }
         }
         (header, rows)
     }
@@ -383,10 +390,7 @@ impl Comparison {
     /// The table as Markdown with the reproducing command.
     pub fn to_markdown(&self) -> String {
         let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "# Table 1: pooling variants against the LBS-only baseline\n"
-        );
+        let _ = writeln!(s, "# Table 1: methods against the no-learning baselines\n");
         if let Some(first) = self.reports.first() {
             let _ = writeln!(
                 s,
@@ -419,35 +423,44 @@ pub(crate) mod tests {
 
     pub(crate) fn report(pooling: &str, model: f64, lbs: f64) -> EvalReport {
         let kinds = |m: f64| BTreeMap::from([("skirt".to_owned(), summary(m))]);
+        let label = weft_models::multilevel::PoolingKind::ALL
+            .into_iter()
+            .find(|p| p.name() == pooling)
+            .map_or(pooling, |p| p.label());
         EvalReport {
             version: REPORT_VERSION,
             run: format!("runs/{pooling}"),
             data: "data/tiny".into(),
             split: "test".into(),
-            preset: "cpu".into(),
-            pooling: pooling.into(),
-            checkpoint: "step-10.bpk".into(),
             sequences: 1,
             frames: 1,
             methods: vec![
                 MethodResult {
-                    name: pooling_label(pooling),
+                    name: label.into(),
+                    model: Some("multilevel".into()),
+                    variant: BTreeMap::from([
+                        ("preset".into(), "cpu".into()),
+                        ("pooling".into(), pooling.into()),
+                    ]),
                     overall: summary(model),
                     per_kind: kinds(model),
+                    fps: vec![Timing {
+                        batch: 1,
+                        vertices: 600,
+                        network_fps: 100.0,
+                        end_to_end_fps: 50.0,
+                        frames: 16,
+                    }],
                 },
                 MethodResult {
                     name: LBS_NAME.into(),
+                    model: None,
+                    variant: BTreeMap::from([("skinning".into(), "lbs".into())]),
                     overall: summary(lbs),
                     per_kind: kinds(lbs),
+                    fps: Vec::new(),
                 },
             ],
-            fps: vec![FpsResult {
-                batch: 1,
-                vertices: 600,
-                network_fps: 100.0,
-                end_to_end_fps: 50.0,
-                frames: 16,
-            }],
             command: "weft eval runs/x --data data/tiny".into(),
         }
     }
@@ -460,6 +473,14 @@ pub(crate) mod tests {
         assert!(md.contains("50.0 % below"), "{md}");
         assert!(md.contains("| LBS only |"), "{md}");
         assert!(md.contains("weft eval runs/x"), "{md}");
+        assert!(
+            md.contains("(multilevel: pooling structure, preset cpu)"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| Multilevel (structure-preserving) | 1 | 600 | 100.0"),
+            "{md}"
+        );
         let dir = std::env::temp_dir().join(format!("weft-eval-report-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("eval.json");
@@ -475,6 +496,11 @@ pub(crate) mod tests {
         assert_eq!(rows[1][0], "Single-level");
         assert_eq!(rows[2][0], LBS_NAME);
         assert!(c.to_markdown().contains("25.0 %"));
+        assert!(EvalReport::read(&path).is_ok());
+        let old = r#"{"version": 1}"#;
+        std::fs::write(&path, old).unwrap();
+        let e = EvalReport::read(&path).unwrap_err().to_string();
+        assert!(e.contains("eval.json"), "{e}");
         let mut other = report("top_k", 1.0, 2.0);
         other.split = "validation".into();
         assert!(Comparison::new(vec![report("none", 1.0, 2.0), other], String::new()).is_err());

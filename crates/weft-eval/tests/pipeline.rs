@@ -7,10 +7,11 @@ use std::path::PathBuf;
 use weft_data::{SequenceRecord, Split};
 use weft_eval::evaluate::{write_report, EvalOptions, Evaluator};
 use weft_eval::explain::explain_vertex;
-use weft_eval::{LbsBaseline, LBS_NAME};
+use weft_eval::LBS_NAME;
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_mesh::TriMesh;
 use weft_models::multilevel::{Multilevel, MultilevelConfig, Predictor};
+use weft_models::{Clip, Deformer, SkinningBaseline, DQS_NAME};
 use weft_motion::{generate, MotionKind, ProceduralParams};
 
 struct TempDir(PathBuf);
@@ -33,7 +34,7 @@ impl Drop for TempDir {
 struct Case {
     body: weft_body::BodyModel,
     garment: TriMesh,
-    poses: Vec<[f32; 72]>,
+    poses: Vec<weft_body::Pose>,
     trans: Vec<[f32; 3]>,
 }
 
@@ -54,7 +55,7 @@ fn case(frames: usize) -> Case {
     Case {
         body,
         garment,
-        poses: weft_eval::animate::flat_poses(&motion),
+        poses: motion.poses().to_vec(),
         trans: motion.trans().to_vec(),
     }
 }
@@ -99,9 +100,14 @@ fn scores_a_known_truth_and_writes_the_report() {
     let c = case(frames);
     // Ground truth: the LBS baseline moved 1 cm along +X, so the baseline's error is
     // exactly 10 mm everywhere and its normals are exact.
-    let lbs = LbsBaseline::new(&c.garment, &c.body, &[])
-        .unwrap()
-        .animate(&c.body, &c.poses, &c.trans)
+    let clip = Clip {
+        betas: &[],
+        poses: &c.poses,
+        trans: &c.trans,
+        fps: 30.0,
+    };
+    let lbs = SkinningBaseline::LBS
+        .animate(&c.garment, &c.body, &clip)
         .unwrap();
     let truth: Vec<Vec<[f32; 3]>> = lbs
         .iter()
@@ -122,10 +128,14 @@ fn scores_a_known_truth_and_writes_the_report() {
         command: "weft eval RUN --data DATA".into(),
         ..EvalOptions::default()
     };
-    let mut ev = Evaluator::new(&p, &c.body, &opts);
-    let (model_mm, lbs_mm) = ev.add(seq).unwrap();
+    let methods: [&dyn Deformer; 3] = [&p, &SkinningBaseline::LBS, &SkinningBaseline::DQS];
+    let mut ev = Evaluator::new(&methods, &c.body, &opts).unwrap();
+    let means = ev.add(seq).unwrap();
+    let (model_mm, lbs_mm, dqs_mm) = (means[0], means[1], means[2]);
     assert!((lbs_mm - 10.0).abs() < 0.01, "{lbs_mm}");
     assert!(model_mm.is_finite());
+    // DQS differs from LBS where the walk bends the hips, by less than the offset.
+    assert!(dqs_mm > 5.0 && (dqs_mm - lbs_mm).abs() > 1e-4, "{dqs_mm}");
     // A diverged sequence: the frames before the divergence are scored.
     let mut cut = weft_data::Sequence {
         record: record(&c, frames),
@@ -148,8 +158,22 @@ fn scores_a_known_truth_and_writes_the_report() {
     assert!(base.overall.e_norm_deg.mean < 0.01);
     assert!(base.per_kind.contains_key("skirt"));
     assert!(base.overall.collision_rate.is_some());
-    assert_eq!(r.fps.len(), 2);
-    assert!(r.fps.iter().all(|f| f.network_fps > 0.0 && f.frames >= 4));
+    let names: Vec<&str> = r.methods.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, [p.name().as_str(), LBS_NAME, DQS_NAME]);
+    assert_eq!(r.methods[0].model.as_deref(), Some("multilevel"));
+    assert_eq!(r.methods[0].variant["pooling"], "structure");
+    assert_eq!(r.methods[2].variant["skinning"], "dqs");
+    // Only the model has something to time apart from animating.
+    assert_eq!(r.methods[0].fps.len(), 2);
+    assert!(r.methods[0]
+        .fps
+        .iter()
+        .all(|f| f.network_fps > 0.0 && f.frames >= 4));
+    assert!(r.methods[1].fps.is_empty() && r.methods[2].fps.is_empty());
+    // Two methods of one name cannot be told apart in a report.
+    let twice: [&dyn Deformer; 2] = [&SkinningBaseline::LBS, &SkinningBaseline::LBS];
+    assert!(Evaluator::new(&twice, &c.body, &opts).is_err());
+    assert!(Evaluator::new(&[], &c.body, &opts).is_err());
 
     let dir = TempDir::new("report");
     let html = write_report(&eval, &dir.0).unwrap();
@@ -164,26 +188,21 @@ fn scores_a_known_truth_and_writes_the_report() {
         assert!(dir.0.join(f).is_file(), "{f} missing");
     }
     let text = std::fs::read_to_string(html).unwrap();
-    assert!(text.contains("LBS only") && text.contains("data:image/png;base64"));
+    assert!(text.contains("LBS only") && text.contains("DQS only"));
+    assert!(text.contains("data:image/png;base64"));
 }
 
 #[test]
 fn attribution_of_one_vertex_is_complete() {
     let c = case(3);
     let p = predictor(true);
-    let a = explain_vertex(
-        p.model(),
-        &c.garment,
-        &c.body,
-        &[],
-        &c.poses,
-        &c.trans,
-        30.0,
-        17,
-        2,
-        8,
-    )
-    .unwrap();
+    let clip = Clip {
+        betas: &[],
+        poses: &c.poses,
+        trans: &c.trans,
+        fps: 30.0,
+    };
+    let a = explain_vertex(p.model(), &c.garment, &c.body, &clip, 17, 2, 8).unwrap();
     assert_eq!(a.scores.len(), c.garment.vertex_count());
     assert_eq!(a.attribution.cols, 6 + 24);
     let change = a.attribution.output - a.attribution.baseline_output;
@@ -194,17 +213,5 @@ fn attribution_of_one_vertex_is_complete() {
         gap.abs() <= 0.05 * change.abs().max(1e-3),
         "gap {gap}, change {change}"
     );
-    assert!(explain_vertex(
-        p.model(),
-        &c.garment,
-        &c.body,
-        &[],
-        &c.poses,
-        &c.trans,
-        30.0,
-        100_000,
-        0,
-        4
-    )
-    .is_err());
+    assert!(explain_vertex(p.model(), &c.garment, &c.body, &clip, 100_000, 0, 4).is_err());
 }

@@ -13,6 +13,7 @@ use std::time::Instant;
 use burn::tensor::{Distribution, Tensor};
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_models::multilevel::{FrameInputs, GarmentInput, Multilevel, MultilevelConfig};
+use weft_models::Clip;
 use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_nn::backend::{cpu, cpu_autodiff, retain_freed_memory, seeded};
 
@@ -92,11 +93,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut params = ProceduralParams::new(MotionKind::Walk);
     params.frames = 64;
     let motion = generate(&params)?;
-    let poses: Vec<[f32; 72]> = motion
-        .poses()
-        .iter()
-        .map(|p| std::array::from_fn(|k| p[k / 3][k % 3]))
-        .collect();
+    let poses = motion.poses().to_vec();
     let trans = motion.trans().to_vec();
     println!(
         "threads {}, body {} vertices",
@@ -124,7 +121,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             for &t in &a.batches {
                 let range = 8..8 + t;
                 let start = Instant::now();
-                let f = FrameInputs::new(&body, &[], &poses, &trans, motion.fps(), range, &cfg)?;
+                let f = FrameInputs::new(
+                    &body,
+                    &Clip {
+                        betas: &[],
+                        poses: &poses,
+                        trans: &trans,
+                        fps: motion.fps(),
+                    },
+                    range,
+                    &cfg,
+                )?;
                 let inputs = start.elapsed().as_secs_f64() * 1e3;
                 let _ = g.frame_batch(t)?;
                 let w = time_ms(a.reps, || {
@@ -199,8 +206,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let n = garment.vertex_count();
                 let g = GarmentInput::new(&garment, &body, &[], &cfg)?;
                 for &t in &a.batches {
-                    let f =
-                        FrameInputs::new(&body, &[], &poses, &trans, motion.fps(), 8..8 + t, &cfg)?;
+                    let f = FrameInputs::new(
+                        &body,
+                        &Clip {
+                            betas: &[],
+                            poses: &poses,
+                            trans: &trans,
+                            fps: motion.fps(),
+                        },
+                        8..8 + t,
+                        &cfg,
+                    )?;
                     let ms = time_ms(a.reps, || {
                         let pair = model.encode_pair(&g).expect("encode");
                         let p = model.forward(&pair, &g, &f).expect("forward");

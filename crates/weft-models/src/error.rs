@@ -34,6 +34,28 @@ pub enum ModelError {
     /// Body model, feature or motion computations failed.
     #[error("body: {0}")]
     Body(String),
+    /// The body model refused an input (a shape, a pose, a frame).
+    #[error("{what}")]
+    BodyModel {
+        /// What was being computed.
+        what: String,
+        /// The cause.
+        #[source]
+        source: Box<weft_body::BodyError>,
+    },
+    /// A body feature (weight transfer, joint distances) could not be computed.
+    #[error("{what}")]
+    Feature {
+        /// What was being computed.
+        what: String,
+        /// The cause.
+        #[source]
+        source: Box<weft_body::features::FeatureError>,
+    },
+    /// A config table refused by the one configuration path (an unknown key, a value
+    /// that does not fit).
+    #[error(transparent)]
+    ConfigFile(#[from] weft_config::ConfigError),
     /// A layer refused its input.
     #[error(transparent)]
     Nn(#[from] weft_nn::NnError),
@@ -61,7 +83,7 @@ pub enum ModelError {
         path: PathBuf,
         /// The cause (line and column).
         #[source]
-        source: toml::de::Error,
+        source: Box<toml::de::Error>,
     },
     /// A run's config.toml naming a model this build does not know.
     #[error("{}: model_kind", path.display())]

@@ -1,15 +1,24 @@
-//! Learned garment deformation models for weft.
+//! weft's garment deformation systems behind one interface.
 //!
+//! - [`deformer`]: [`Deformer`] and [`Clip`], what every system implements and every
+//!   consumer (evaluation, `weft animate`, the demo) calls;
+//! - [`baseline`]: the no-learning LBS and DQS baselines;
 //! - [`multilevel`]: the Multilevel model of seed 000 (multi-source garment graph,
-//!   structure-preserving pooling, temporal skinning weights and blend shapes, LBS).
-//! - [`kind`]: [`ModelKind`], the systems by name.
-//! - [`run`]: the one owner of the run directory (layout, header, `latest`).
+//!   structure-preserving pooling, temporal skinning weights and blend shapes, LBS);
+//! - [`kind`]: [`ModelKind`], the systems by name;
+//! - [`run`]: the one owner of the run directory; [`load_deformer`] opens any run.
 
+pub mod baseline;
+pub mod deformer;
 pub mod error;
 pub mod kind;
+pub mod load;
 pub mod multilevel;
 pub mod run;
 
+pub use baseline::{SkinningBaseline, DQS_NAME, LBS_NAME};
+pub use deformer::{Clip, Deformer, Frames, Timing};
 pub use error::ModelError;
 pub use kind::{ModelKind, UnknownModelKind};
+pub use load::load_deformer;
 pub use run::{RunHeader, RunLayout};

@@ -241,7 +241,7 @@ pub fn read_run_config(run_dir: &Path) -> Result<(RunHeader, toml::Table), Model
     })?;
     let table: toml::Table = toml::from_str(&text).map_err(|source| ModelError::RunToml {
         path: path.clone(),
-        source,
+        source: Box::new(source),
     })?;
     let header = RunHeader::from_table(&table, &path)?;
     Ok((header, table))

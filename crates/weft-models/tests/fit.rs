@@ -20,6 +20,7 @@ use weft_body::features::{transfer_weights_diffused, DiffusionParams};
 use weft_body::skinning::{lbs, SkinWeights};
 use weft_garment::GarmentKind;
 use weft_models::multilevel::{FrameInputs, GarmentInput, MultilevelConfig};
+use weft_models::Clip;
 use weft_nn::{cosine_annealing, AdamaxConfig};
 
 /// One frame of garment positions.
@@ -59,7 +60,7 @@ fn training_beats_the_lbs_baseline_on_unseen_frames() {
     let frames: Vec<(Positions, Positions)> = (0..c.poses.len())
         .map(|t| {
             let pose: Vec<[f64; 3]> = (0..24)
-                .map(|j| std::array::from_fn(|a| f64::from(c.poses[t][3 * j + a])))
+                .map(|j| std::array::from_fn(|a| f64::from(c.poses[t][j][a])))
                 .collect();
             let a = c
                 .body
@@ -122,10 +123,12 @@ fn training_beats_the_lbs_baseline_on_unseen_frames() {
         .map(|w| {
             FrameInputs::new(
                 &c.body,
-                &c.betas,
-                &c.poses,
-                &c.trans,
-                c.fps,
+                &Clip {
+                    betas: &c.betas,
+                    poses: &c.poses,
+                    trans: &c.trans,
+                    fps: c.fps,
+                },
                 w.clone(),
                 &cfg,
             )
@@ -147,10 +150,12 @@ fn training_beats_the_lbs_baseline_on_unseen_frames() {
     let eval = net.valid();
     let f = FrameInputs::new(
         &c.body,
-        &c.betas,
-        &c.poses,
-        &c.trans,
-        c.fps,
+        &Clip {
+            betas: &c.betas,
+            poses: &c.poses,
+            trans: &c.trans,
+            fps: c.fps,
+        },
         test.clone(),
         &cfg,
     )

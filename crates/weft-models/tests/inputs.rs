@@ -6,6 +6,7 @@ mod common;
 use common::{case, model};
 use weft_mesh::TriMesh;
 use weft_models::multilevel::{FrameInputs, GarmentInput, MultilevelConfig};
+use weft_models::Clip;
 use weft_models::ModelError;
 
 fn message<T>(r: Result<T, ModelError>) -> String {
@@ -28,17 +29,30 @@ fn skeleton_and_feature_mismatches_are_named() {
     );
     let m = message(FrameInputs::new(
         &c.body,
-        &c.betas,
-        &c.poses,
-        &c.trans,
-        c.fps,
+        &Clip {
+            betas: &c.betas,
+            poses: &c.poses,
+            trans: &c.trans,
+            fps: c.fps,
+        },
         0..2,
         &other,
     ));
     assert!(m.contains("joints"), "{m}");
     // Inputs built for one config fed to a model of another.
     let g = GarmentInput::new(&c.garment, &c.body, &c.betas, &cfg).unwrap();
-    let f = FrameInputs::new(&c.body, &c.betas, &c.poses, &c.trans, c.fps, 0..2, &cfg).unwrap();
+    let f = FrameInputs::new(
+        &c.body,
+        &Clip {
+            betas: &c.betas,
+            poses: &c.poses,
+            trans: &c.trans,
+            fps: c.fps,
+        },
+        0..2,
+        &cfg,
+    )
+    .unwrap();
     let narrow = model(&cfg.clone().with_body_samples(64), 1, false);
     let m = message(narrow.encode_pair(&g));
     assert!(
@@ -66,13 +80,15 @@ fn non_finite_and_out_of_range_inputs_are_refused() {
     assert!(m.contains("betas"), "{m}");
 
     let mut poses = c.poses.clone();
-    poses[1][7] = f32::INFINITY;
+    poses[1][2][1] = f32::INFINITY;
     let m = message(FrameInputs::new(
         &c.body,
-        &c.betas,
-        &poses,
-        &c.trans,
-        c.fps,
+        &Clip {
+            betas: &c.betas,
+            poses: &poses,
+            trans: &c.trans,
+            fps: c.fps,
+        },
         0..3,
         &cfg,
     ));
@@ -81,40 +97,48 @@ fn non_finite_and_out_of_range_inputs_are_refused() {
     trans[2][0] = f32::NAN;
     let m = message(FrameInputs::new(
         &c.body,
-        &c.betas,
-        &c.poses,
-        &trans,
-        c.fps,
+        &Clip {
+            betas: &c.betas,
+            poses: &c.poses,
+            trans: &trans,
+            fps: c.fps,
+        },
         0..3,
         &cfg,
     ));
     assert!(m.contains("translations"), "{m}");
     let m = message(FrameInputs::new(
         &c.body,
-        &c.betas,
-        &c.poses,
-        &c.trans[..4],
-        c.fps,
+        &Clip {
+            betas: &c.betas,
+            poses: &c.poses,
+            trans: &c.trans[..4],
+            fps: c.fps,
+        },
         0..3,
         &cfg,
     ));
     assert!(m.contains("root translations"), "{m}");
     let m = message(FrameInputs::new(
         &c.body,
-        &c.betas,
-        &c.poses,
-        &c.trans,
-        c.fps,
+        &Clip {
+            betas: &c.betas,
+            poses: &c.poses,
+            trans: &c.trans,
+            fps: c.fps,
+        },
         5..20,
         &cfg,
     ));
     assert!(m.contains("frame window"), "{m}");
     let m = message(FrameInputs::new(
         &c.body,
-        &c.betas,
-        &c.poses,
-        &c.trans,
-        0.0,
+        &Clip {
+            betas: &c.betas,
+            poses: &c.poses,
+            trans: &c.trans,
+            fps: 0.0,
+        },
         0..2,
         &cfg,
     ));

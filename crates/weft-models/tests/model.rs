@@ -9,6 +9,7 @@ use common::{case, host, model, Case};
 use weft_body::features::SkinningWeights;
 use weft_body::skinning::{lbs, SkinWeights};
 use weft_models::multilevel::{FrameInputs, GarmentInput, MultilevelConfig, PoolingKind};
+use weft_models::Clip;
 
 fn inputs(
     c: &Case,
@@ -16,8 +17,18 @@ fn inputs(
     frames: std::ops::Range<usize>,
 ) -> (GarmentInput, FrameInputs) {
     let g = GarmentInput::new(&c.garment, &c.body, &c.betas, cfg).expect("garment input");
-    let f = FrameInputs::new(&c.body, &c.betas, &c.poses, &c.trans, c.fps, frames, cfg)
-        .expect("frame inputs");
+    let f = FrameInputs::new(
+        &c.body,
+        &Clip {
+            betas: &c.betas,
+            poses: &c.poses,
+            trans: &c.trans,
+            fps: c.fps,
+        },
+        frames,
+        cfg,
+    )
+    .expect("frame inputs");
     (g, f)
 }
 
@@ -67,7 +78,7 @@ fn zero_gains_reproduce_transferred_lbs() {
     let n = c.garment.vertex_count();
     for (k, t) in (3..5).enumerate() {
         let pose: Vec<[f64; 3]> = (0..24)
-            .map(|j| std::array::from_fn(|a| f64::from(c.poses[t][3 * j + a])))
+            .map(|j| std::array::from_fn(|a| f64::from(c.poses[t][j][a])))
             .collect();
         let a = c
             .body

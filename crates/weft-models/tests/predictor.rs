@@ -10,6 +10,7 @@ use common::{case, host, model};
 use weft_models::multilevel::{
     FrameInputs, GarmentInput, MultilevelConfig, Predictor, RUN_FORMAT_VERSION,
 };
+use weft_models::Clip;
 
 struct TempDir(PathBuf);
 
@@ -53,16 +54,27 @@ fn predictor_round_trip_and_mismatches() {
     let predictor = Predictor::load(run).expect("load the run");
     assert_eq!(predictor.config(), &cfg);
     let frames = predictor
-        .animate(&c.garment, &c.body, &c.betas, &c.poses, &c.trans, c.fps)
+        .animate(
+            &c.garment,
+            &c.body,
+            &Clip {
+                betas: &c.betas,
+                poses: &c.poses,
+                trans: &c.trans,
+                fps: c.fps,
+            },
+        )
         .unwrap();
     assert_eq!(frames.len(), c.poses.len());
     let g = GarmentInput::new(&c.garment, &c.body, &c.betas, &cfg).unwrap();
     let f = FrameInputs::new(
         &c.body,
-        &c.betas,
-        &c.poses,
-        &c.trans,
-        c.fps,
+        &Clip {
+            betas: &c.betas,
+            poses: &c.poses,
+            trans: &c.trans,
+            fps: c.fps,
+        },
         0..c.poses.len(),
         &cfg,
     )

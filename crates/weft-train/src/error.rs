@@ -17,7 +17,7 @@ pub enum TrainError {
         expected: String,
     },
     /// Reading or writing a file of the run.
-    #[error("{}: {source}", path.display())]
+    #[error("{}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -133,6 +133,10 @@ pub enum TrainError {
     /// The run directory (weft-models owns its layout) or the model refused something.
     #[error(transparent)]
     Model(#[from] weft_models::ModelError),
+    /// A config file refused by the one configuration path (an unknown key, a value
+    /// that does not fit).
+    #[error(transparent)]
+    ConfigFile(#[from] weft_config::ConfigError),
     /// The model refused the inputs of one training sequence.
     #[error("sequence {id}")]
     Sequence {

@@ -56,18 +56,6 @@ pub struct MultilevelRun {
     pub train: TrainConfig,
 }
 
-/// `overlay` merged into `base`, tables recursively, other values replaced.
-fn merge(base: &mut toml::Table, overlay: toml::Table) {
-    for (k, v) in overlay {
-        match (base.get_mut(&k), v) {
-            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
-            (_, v) => {
-                base.insert(k, v);
-            }
-        }
-    }
-}
-
 impl MultilevelRun {
     /// The preset `name` (model and training sides).
     pub fn preset(name: &str) -> Result<Self> {
@@ -103,23 +91,16 @@ impl MultilevelRun {
             })
             .unwrap_or_else(|| "cpu".to_string());
         let mut run = Self::preset(&name)?;
-        let Some(mut table) = table else {
+        let Some(table) = table else {
             return Ok(run);
         };
         let path = file.unwrap_or(Path::new("config"));
-        let parse = |message: String| TrainError::Parse {
-            path: path.to_path_buf(),
-            message,
-        };
-        for key in table.keys() {
-            if !["format_version", "model_kind", "preset", "model", "train"].contains(&key.as_str())
-            {
-                return Err(parse(format!(
-                    "unknown key `{key}` (expected format_version, model_kind, preset, [model], \
-                     [train])"
-                )));
-            }
-        }
+        let origin = path.display().to_string();
+        weft_config::check_keys(
+            &table,
+            &["format_version", "model_kind", "preset", "model", "train"],
+            &origin,
+        )?;
         if let Some(v) = table.get("model_kind") {
             if v.as_str() != Some(ModelKind::Multilevel.name()) {
                 return Err(TrainError::Mismatch {
@@ -140,22 +121,26 @@ impl MultilevelRun {
                 });
             }
         }
-        if let Some(toml::Value::Table(m)) = table.remove("model") {
-            let mut base = crate::run::to_table("model config", &run.model)?;
-            merge(&mut base, m);
-            run.model = toml::Value::Table(base)
-                .try_into()
-                .map_err(|e: toml::de::Error| parse(format!("[model]: {e}")))?;
-            run.model
-                .validate()
-                .map_err(|e| parse(format!("[model]: {e}")))?;
+        let section = |name: &str| match table.get(name) {
+            None => Ok(None),
+            Some(toml::Value::Table(t)) => Ok(Some(t)),
+            Some(other) => Err(TrainError::Parse {
+                path: path.to_path_buf(),
+                message: format!(
+                    "`{name}` must be a table ([{name}]), found {}",
+                    other.type_str()
+                ),
+            }),
+        };
+        if let Some(m) = section("model")? {
+            run.model = weft_config::overlay(&run.model, m, &origin, "model")?;
+            run.model.validate().map_err(|e| TrainError::Parse {
+                path: path.to_path_buf(),
+                message: format!("[model]: {e}"),
+            })?;
         }
-        if let Some(toml::Value::Table(t)) = table.remove("train") {
-            let mut base = crate::run::to_table("train config", &run.train)?;
-            merge(&mut base, t);
-            run.train = toml::Value::Table(base)
-                .try_into()
-                .map_err(|e: toml::de::Error| parse(format!("[train]: {e}")))?;
+        if let Some(t) = section("train")? {
+            run.train = weft_config::overlay(&run.train, t, &origin, "train")?;
         }
         run.train.validate()?;
         Ok(run)
@@ -635,6 +620,25 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("stepz"), "{e}");
+        // The typo the platform issue found silently dropped: refused, dotted and with
+        // the file, though MultilevelConfig (burn's Config derive) does not deny unknown
+        // fields itself.
+        std::fs::write(&path, "[model]\nmp_chanels = 4\n").unwrap();
+        let e = MultilevelRun::resolve(None, Some(&path))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("model.mp_chanels") && e.contains("paper.toml"),
+            "{e}"
+        );
+        // Switching the optimiser replaces its table: Adamax's fields do not leak in.
+        std::fs::write(&path, "[train.optimizer]\nkind = \"adam\"\n").unwrap();
+        let r = MultilevelRun::resolve(None, Some(&path)).unwrap();
+        assert!(
+            matches!(r.train.optimizer, crate::optim::OptimizerConfig::Adam(_)),
+            "{:?}",
+            r.train.optimizer
+        );
         std::fs::write(&path, "[train]\nwindow = 0\n").unwrap();
         let e = MultilevelRun::resolve(None, Some(&path))
             .unwrap_err()

@@ -7,28 +7,25 @@ use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
+use weft_body::PosedSequence;
 use weft_eval::animate::{animate, push_out_of_body, write_animation, MotionSpec};
-use weft_eval::PosedBodies;
 use weft_mesh::export::ExportFormat;
-use weft_models::multilevel::Predictor;
+use weft_models::load_deformer;
 
+use super::body_args::BodyArgs;
 use super::emit;
 
 #[derive(Args)]
 pub struct AnimateArgs {
-    /// Run directory written by `weft train`.
+    /// Run directory written by `weft train` (any model kind: the run names it).
     #[arg(value_name = "RUN")]
     run: PathBuf,
     /// The garment (.obj/.ply), any topology, dressed on the body at --betas in its rest
     /// pose (e.g. from `weft garment generate`).
     #[arg(long, value_name = "G.obj")]
     garment: PathBuf,
-    /// An SMPL-format body model (.npz); weft's default body when left out.
-    #[arg(long, value_name = "FILE")]
-    body: Option<PathBuf>,
-    /// Shape β (comma separated), zeros when left out.
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-    betas: Vec<f32>,
+    #[command(flatten)]
+    body: BodyArgs,
     /// The motion: an AMASS .npz or .bvh file, or a procedural name (walk, run, jump,
     /// dance, kick, …).
     #[arg(long, value_name = "FILE|NAME")]
@@ -66,22 +63,22 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             anyhow::bail!("--push-out {mm}: expected a distance in millimetres >= 0");
         }
     }
-    let predictor = Predictor::load(&args.run)
-        .with_context(|| format!("loading run {}", args.run.display()))?;
+    let deformer =
+        load_deformer(&args.run).with_context(|| format!("loading run {}", args.run.display()))?;
     let garment = weft_mesh::read_mesh(&args.garment)
         .with_context(|| format!("reading the garment {}", args.garment.display()))?;
-    let body = weft_data::generate::load_body(args.body.as_deref())?;
-    let motion = MotionSpec::parse(&args.motion, args.frames, args.seed, args.fps)?
-        .load(&body, &args.betas)?;
+    let (body, _) = args.body.load()?;
+    let betas: Vec<f32> = args.body.betas(&body)?.iter().map(|&b| b as f32).collect();
+    let motion =
+        MotionSpec::parse(&args.motion, args.frames, args.seed, args.fps)?.load(&body, &betas)?;
     let started = Instant::now();
-    let mut frames = animate(&predictor, &garment, &body, &args.betas, &motion)?;
+    let mut frames = animate(deformer.as_ref(), &garment, &body, &betas, &motion)?;
     let seconds = started.elapsed().as_secs_f64();
-    let poses = weft_eval::animate::flat_poses(&motion);
     let posed = if args.push_out.is_some() || format == ExportFormat::Glb {
-        Some(PosedBodies::new(
+        Some(PosedSequence::new(
             &body,
-            &args.betas,
-            &poses,
+            &betas,
+            motion.poses(),
             motion.trans(),
         )?)
     } else {
@@ -120,6 +117,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             "frames": frames.len(),
             "vertices": garment.vertex_count(),
             "fps": motion.fps(),
+            "model": deformer.name(),
             "inference_seconds": seconds,
             "pushed_out_vertices": pushed,
         }))?)?;

@@ -6,13 +6,16 @@ use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
 use weft_data::{Dataset, Split};
-use weft_eval::animate::{flat_poses, MotionSpec};
+use weft_eval::animate::MotionSpec;
 use weft_eval::attribution::DEFAULT_SAMPLES;
 use weft_eval::explain::explain_vertex;
 use weft_eval::pictures::attribution_map;
-use weft_models::multilevel::predictor::{latest_checkpoint, read_run_config};
+use weft_models::multilevel::predictor::read_run_config;
 use weft_models::multilevel::Predictor;
+use weft_models::run::latest_checkpoint;
+use weft_models::Clip;
 
+use super::body_args::BodyArgs;
 use super::emit;
 
 #[derive(Args)]
@@ -31,17 +34,16 @@ pub struct AttributeArgs {
     out: PathBuf,
     /// Take garment, body shape and motion from a dataset sequence (with --sequence, or
     /// the first sequence of the test split).
-    #[arg(long, value_name = "DIR", conflicts_with = "garment")]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["garment", "body", "betas"])]
     data: Option<PathBuf>,
     /// The dataset sequence id (see `weft data info`).
     #[arg(long, value_name = "ID", requires = "data")]
     sequence: Option<String>,
-    /// Or a garment (.obj/.ply) dressed on the default body in its rest pose, at --betas.
+    /// Or a garment (.obj/.ply) dressed on the body in its rest pose, at --betas.
     #[arg(long, value_name = "G.obj")]
     garment: Option<PathBuf>,
-    /// Shape β of the body (comma separated) for --garment.
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
-    betas: Vec<f32>,
+    #[command(flatten)]
+    body: BodyArgs,
     /// Motion for --garment: an .npz/.bvh file or a procedural name (walk, run, dance, …).
     #[arg(long, default_value = "walk")]
     motion: String,
@@ -91,14 +93,15 @@ pub fn run(args: &AttributeArgs) -> Result<()> {
         (None, Some(path)) => {
             let garment = weft_mesh::read_mesh(path)
                 .with_context(|| format!("reading the garment {}", path.display()))?;
-            let body = weft_body::default_body()?;
+            let (body, _) = args.body.load()?;
+            let betas: Vec<f32> = args.body.betas(&body)?.iter().map(|&b| b as f32).collect();
             let spec = MotionSpec::parse(&args.motion, args.frame.max(1) + 1, 0, 30.0)?;
-            let motion = spec.load(&body, &args.betas)?;
+            let motion = spec.load(&body, &betas)?;
             (
                 garment,
                 body,
-                args.betas.clone(),
-                flat_poses(&motion),
+                betas,
+                motion.poses().to_vec(),
                 motion.trans().to_vec(),
                 motion.fps(),
                 format!("{} on motion {}", path.display(), args.motion),
@@ -106,14 +109,17 @@ pub fn run(args: &AttributeArgs) -> Result<()> {
         }
         (None, None) => bail!("give --data DIR (a dataset sequence) or --garment G.obj"),
     };
+    let clip = Clip {
+        betas: &betas,
+        poses: &poses,
+        trans: &trans,
+        fps,
+    };
     let a = explain_vertex(
         predictor.model(),
         &garment,
         &body,
-        &betas,
-        &poses,
-        &trans,
-        fps,
+        &clip,
         args.vertex,
         args.frame,
         args.samples,

@@ -1,6 +1,6 @@
 //! `weft demo`: the whole path with no arguments — tiny dataset, `cpu` training,
 //! evaluation against the LBS-only baseline, an unseen garment animated on an unseen
-//! motion, one attribution map, one HTML report (weft_eval::demo).
+//! motion, one attribution map, one HTML report (weft_pipeline::demo).
 
 use anyhow::{Context, Result};
 use clap::Args;
@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 use weft_data::progress::FrameBar;
 use weft_data::Physics;
-use weft_eval::demo::{run_demo, DemoOptions};
+use weft_pipeline::demo::{run_demo, DemoOptions};
 
 use super::emit;
 

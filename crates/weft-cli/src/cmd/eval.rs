@@ -1,13 +1,13 @@
-//! `weft eval`: a trained run against the simulated ground truth of a dataset split and
-//! the LBS-only baseline (RUN/report/), or several runs side by side as Table 1.
+//! `weft eval`: a trained run (any model kind) and the LBS and DQS baselines against the
+//! simulated ground truth of a dataset split (RUN/report/), or several runs side by side
+//! as Table 1.
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
-use weft_data::{Dataset, Split};
-use weft_eval::evaluate::{evaluate, write_report, EvalOptions};
+use weft_data::Split;
+use weft_eval::evaluate::EvalOptions;
 use weft_eval::report::{markdown_table, write_text, Comparison, EvalReport};
-use weft_models::multilevel::Predictor;
 use weft_render::Report;
 
 use super::emit;
@@ -71,22 +71,17 @@ pub fn command_line() -> String {
         .join(" ")
 }
 
-/// Evaluates `run` on `data` and writes RUN/report/; returns the report.
+/// Evaluates `run` (whatever model kind trained it) and the LBS and DQS baselines on
+/// `data`, writes RUN/report/ and returns the report.
 pub fn evaluate_run(
     run: &Path,
     data: &Path,
     opts: &EvalOptions,
     quiet: bool,
 ) -> Result<EvalReport> {
-    let predictor =
-        Predictor::load(run).with_context(|| format!("loading run {}", run.display()))?;
-    let dataset =
-        Dataset::open(data).with_context(|| format!("opening dataset {}", data.display()))?;
     eprintln!(
-        "evaluating {} (preset {}, pooling {}) on the {} split of {}",
+        "evaluating {} on the {} split of {}",
         run.display(),
-        predictor.config().preset,
-        predictor.config().pooling.name(),
         opts.split,
         data.display()
     );
@@ -95,9 +90,8 @@ pub fn evaluate_run(
             eprintln!("  {line}");
         }
     };
-    let eval = evaluate(&predictor, run, &dataset, opts, &mut progress)?;
-    let dir = run.join("report");
-    let html = write_report(&eval, &dir)?;
+    let (eval, html) = weft_pipeline::evaluate::evaluate_run(run, data, opts, &mut progress)?;
+    eprintln!("  {}", eval.report.methods_line());
     eprintln!(
         "wrote {} (and eval.md, eval.json, pictures)",
         html.display()

@@ -46,6 +46,17 @@ impl PoolingKind {
             PoolingKind::Asap => "asap",
         }
     }
+
+    /// The name in tables and pictures (Table 1's row names).
+    pub fn label(self) -> &'static str {
+        match self {
+            PoolingKind::Structure => "Multilevel (structure-preserving)",
+            PoolingKind::None => "Single-level",
+            PoolingKind::TopK => "TopKPool",
+            PoolingKind::Sag => "SAGPool",
+            PoolingKind::Asap => "ASAP",
+        }
+    }
 }
 
 /// Every width and depth of the model; see the module documentation. Defaults are the
@@ -253,28 +264,18 @@ impl MultilevelConfig {
 
     /// A config from TOML; missing fields take their defaults (the `cpu` preset's).
     pub fn from_toml(text: &str) -> Result<Self, ModelError> {
-        let table: toml::Table =
-            toml::from_str(text).map_err(|e| ModelError::Config(format!("from TOML: {e}")))?;
-        Self::from_table(table)
+        let table: toml::Table = toml::from_str(text).map_err(|e| ModelError::RunToml {
+            path: "<model config>".into(),
+            source: Box::new(e),
+        })?;
+        Self::from_table(&table, "<model config>")
     }
 
-    /// A config from a parsed TOML table (the `[model]` table of a run's config.toml):
-    /// missing fields take their defaults, unknown fields are refused by name.
-    pub fn from_table(table: toml::Table) -> Result<Self, ModelError> {
-        let mut merged = toml::Table::try_from(Self::cpu())
-            .map_err(|e| ModelError::Config(format!("to TOML: {e}")))?;
-        for (key, value) in table {
-            if !merged.contains_key(&key) {
-                return Err(ModelError::Config(format!(
-                    "unknown field {key:?}; expected one of {}",
-                    merged.keys().cloned().collect::<Vec<_>>().join(", ")
-                )));
-            }
-            merged.insert(key, value);
-        }
-        let cfg: Self = toml::Value::Table(merged)
-            .try_into()
-            .map_err(|e: toml::de::Error| ModelError::Config(e.to_string()))?;
+    /// A config from a parsed TOML table (the `[model]` table of a run's config.toml,
+    /// read from `origin`): the `cpu` preset with the table laid over it by the one
+    /// configuration path (weft-config), so an unknown key is refused by name.
+    pub fn from_table(table: &toml::Table, origin: &str) -> Result<Self, ModelError> {
+        let cfg = weft_config::overlay(&Self::cpu(), table, origin, "model")?;
         cfg.validate()?;
         Ok(cfg)
     }

@@ -19,6 +19,7 @@ use weft_motion::{pose_history, Motion, Pose};
 
 use super::config::MultilevelConfig;
 use super::garment::{betas_f64, body_sample_indices, check_body};
+use crate::deformer::Clip;
 use crate::error::ModelError;
 
 /// Numbers per frame of the pose history: 24 axis-angles and the root velocity.
@@ -42,7 +43,8 @@ pub struct FrameInputs {
 }
 
 impl FrameInputs {
-    /// The inputs of motion frames `frames` (a non-empty range of `0..poses.len()`).
+    /// The inputs of motion frames `frames` of `clip` (a non-empty range of
+    /// `0..clip.len()`).
     ///
     /// Errors: a body whose joint count is not the config's (a motion of another
     /// skeleton: poses are SMPL's 24 joints), `poses` and `trans` of different lengths, an
@@ -50,13 +52,16 @@ impl FrameInputs {
     /// translations or betas.
     pub fn new(
         body: &BodyModel,
-        betas: &[f32],
-        poses: &[[f32; 72]],
-        trans: &[[f32; 3]],
-        fps: f64,
+        clip: &Clip,
         frames: Range<usize>,
         cfg: &MultilevelConfig,
     ) -> Result<Self, ModelError> {
+        let Clip {
+            betas,
+            poses,
+            trans,
+            fps,
+        } = *clip;
         cfg.validate()?;
         check_body(body, cfg)?;
         if cfg.joints != 24 {
@@ -86,10 +91,7 @@ impl FrameInputs {
         let m = cfg.history;
         let first = frames.start.saturating_sub(m);
         // Only the frames the window and its history need.
-        let local_poses: Vec<Pose> = poses[first..frames.end]
-            .iter()
-            .map(|p| std::array::from_fn(|j| [p[3 * j], p[3 * j + 1], p[3 * j + 2]]))
-            .collect();
+        let local_poses: Vec<Pose> = poses[first..frames.end].to_vec();
         let local_trans = trans[first..frames.end].to_vec();
         for (what, values) in [
             (

@@ -7,8 +7,10 @@
 //! naming the newest checkpoint in `RUN/checkpoints/`, a burn module record file
 //! (`Module::save_file`, burn's burnpack format).
 
+use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use burn::module::Module;
 use burn::tensor::Device;
@@ -19,10 +21,11 @@ use super::config::MultilevelConfig;
 use super::frames::FrameInputs;
 use super::garment::GarmentInput;
 use super::model::Multilevel;
+use crate::deformer::{Clip, Deformer, Frames, Timing};
 use crate::error::ModelError;
+use crate::kind::ModelKind;
 
-/// Version of the run directory format this crate reads.
-pub const RUN_FORMAT_VERSION: i64 = 1;
+pub use crate::run::FORMAT_VERSION as RUN_FORMAT_VERSION;
 
 /// Frames inferred together by [`Predictor::animate`] (batch 16, as in seed 000's timing).
 pub const ANIMATE_WINDOW: usize = 16;
@@ -42,62 +45,36 @@ fn run_err(path: &Path, message: impl Into<String>) -> ModelError {
     }
 }
 
-/// Reads `RUN/config.toml`: checks the format version and returns the model config.
+/// Reads `RUN/config.toml` ([`crate::run::read_run_config`]: header and format version)
+/// and returns its `[model]` table as a Multilevel config.
 pub fn read_run_config(run_dir: &Path) -> Result<MultilevelConfig, ModelError> {
-    let path = run_dir.join("config.toml");
-    let text = std::fs::read_to_string(&path).map_err(|e| run_err(&path, e.to_string()))?;
-    let table: toml::Table = toml::from_str(&text).map_err(|e| run_err(&path, e.to_string()))?;
-    match table
-        .get("format_version")
-        .and_then(toml::Value::as_integer)
-    {
-        Some(RUN_FORMAT_VERSION) => {}
-        Some(v) => {
-            return Err(run_err(
-                &path,
-                format!("format_version {v}; this build reads version {RUN_FORMAT_VERSION}"),
-            ))
-        }
-        None => {
-            return Err(run_err(
-                &path,
-                format!("no integer format_version (expected {RUN_FORMAT_VERSION})"),
-            ))
-        }
+    let (header, mut table) = crate::run::read_run_config(run_dir)?;
+    let path = crate::run::RunLayout::new(run_dir).config();
+    if header.model != ModelKind::Multilevel {
+        return Err(run_err(
+            &path,
+            format!("a run of model `{}`, not multilevel", header.model),
+        ));
     }
-    let model = match table.get("model") {
-        Some(toml::Value::Table(t)) => t.clone(),
+    let model = match table.remove("model") {
+        Some(toml::Value::Table(t)) => t,
         _ => return Err(run_err(&path, "no [model] table")),
     };
     let cfg =
-        MultilevelConfig::from_table(model).map_err(|e| run_err(&path, format!("[model]: {e}")))?;
-    if let Some(preset) = table.get("preset").and_then(toml::Value::as_str) {
-        if preset != cfg.preset {
-            return Err(run_err(
-                &path,
-                format!(
-                    "preset {preset:?} but the [model] table says {:?}",
-                    cfg.preset
-                ),
-            ));
-        }
-    }
-    Ok(cfg)
-}
-
-/// The checkpoint `RUN/checkpoints/latest` names.
-pub fn latest_checkpoint(run_dir: &Path) -> Result<PathBuf, ModelError> {
-    let dir = run_dir.join("checkpoints");
-    let latest = dir.join("latest");
-    let name = std::fs::read_to_string(&latest).map_err(|e| run_err(&latest, e.to_string()))?;
-    let name = name.trim();
-    if name.is_empty() || name.contains(['/', '\\']) {
+        MultilevelConfig::from_table(&model, &path.display().to_string()).map_err(|e| match e {
+            ModelError::Config(m) => run_err(&path, format!("[model]: {m}")),
+            other => other,
+        })?;
+    if header.preset != cfg.preset {
         return Err(run_err(
-            &latest,
-            format!("expected a checkpoint file name in checkpoints/, got {name:?}"),
+            &path,
+            format!(
+                "preset {:?} but the [model] table says {:?}",
+                header.preset, cfg.preset
+            ),
         ));
     }
-    Ok(dir.join(name))
+    Ok(cfg)
 }
 
 impl Predictor {
@@ -108,7 +85,7 @@ impl Predictor {
     /// do not fit the config (a checkpoint of another preset).
     pub fn load(run_dir: &Path) -> Result<Self, ModelError> {
         let config = read_run_config(run_dir)?;
-        let checkpoint = latest_checkpoint(run_dir)?;
+        let checkpoint = crate::run::latest_checkpoint(run_dir)?;
         Self::from_checkpoint(config, &checkpoint, &weft_nn::backend::cpu())
     }
 
@@ -159,27 +136,21 @@ impl Predictor {
         &self.checkpoint
     }
 
-    /// Garment vertices of every frame of a motion: `garment` in the rest pose of `body`
-    /// at shape `betas`, animated by `poses`/`trans` at `fps`. The pair is encoded once;
-    /// frames run in windows of [`ANIMATE_WINDOW`].
+    /// Garment vertices of every frame of `clip`: `garment` in the rest pose of `body`
+    /// at shape `clip.betas`. The pair is encoded once; frames run in windows of
+    /// [`ANIMATE_WINDOW`].
     pub fn animate(
         &self,
         garment: &TriMesh,
         body: &BodyModel,
-        betas: &[f32],
-        poses: &[[f32; 72]],
-        trans: &[[f32; 3]],
-        fps: f64,
-    ) -> Result<Vec<Vec<[f32; 3]>>, ModelError> {
-        let g = GarmentInput::new(garment, body, betas, &self.config)?;
+        clip: &Clip,
+    ) -> Result<Frames, ModelError> {
+        clip.check()?;
+        let g = GarmentInput::new(garment, body, clip.betas, &self.config)?;
         let pair = self.model.encode_pair(&g)?;
-        let mut out = Vec::with_capacity(poses.len());
-        let windows: Vec<Range<usize>> = (0..poses.len())
-            .step_by(ANIMATE_WINDOW)
-            .map(|a| a..(a + ANIMATE_WINDOW).min(poses.len()))
-            .collect();
-        for range in windows {
-            let f = FrameInputs::new(body, betas, poses, trans, fps, range, &self.config)?;
+        let mut out = Vec::with_capacity(clip.len());
+        for range in windows(clip.len(), ANIMATE_WINDOW, clip.len()) {
+            let f = FrameInputs::new(body, clip, range, &self.config)?;
             let p = self.model.forward(&pair, &g, &f)?;
             let [t, n, _] = p.vertices.dims();
             let data = p
@@ -200,5 +171,108 @@ impl Predictor {
             }
         }
         Ok(out)
+    }
+
+    /// Frames per second on `clip` per batch size: the pair encoded once (seed 000
+    /// times it so), then windows of `batch` frames over `frames` frames (wrapping
+    /// around the clip), network alone and with the per-frame inputs.
+    pub fn time(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+        batches: &[usize],
+        frames: usize,
+    ) -> Result<Vec<Timing>, ModelError> {
+        clip.check()?;
+        if clip.is_empty() {
+            return Err(ModelError::mismatch("frames to time", "at least one", 0));
+        }
+        let g = GarmentInput::new(garment, body, clip.betas, &self.config)?;
+        let pair = self.model.encode_pair(&g)?;
+        let mut out = Vec::new();
+        for &batch in batches {
+            let batch = batch.clamp(1, clip.len());
+            let windows = windows(frames.max(batch), batch, clip.len());
+            // One untimed window: first-use allocations and the cached frame batch.
+            let warm = FrameInputs::new(body, clip, windows[0].clone(), &self.config)?;
+            self.model.forward(&pair, &g, &warm)?;
+            let (mut inputs_s, mut network_s, mut timed) = (0.0, 0.0, 0usize);
+            for w in windows {
+                let t0 = Instant::now();
+                let f = FrameInputs::new(body, clip, w.clone(), &self.config)?;
+                let t1 = Instant::now();
+                let p = self.model.forward(&pair, &g, &f)?;
+                // Reading the result back is part of inference (it synchronises the device).
+                let _ = p.vertices.into_data();
+                network_s += t1.elapsed().as_secs_f64();
+                inputs_s += (t1 - t0).as_secs_f64();
+                timed += w.len();
+            }
+            out.push(Timing {
+                batch,
+                vertices: g.vertex_count(),
+                network_fps: timed as f64 / network_s.max(1e-12),
+                end_to_end_fps: timed as f64 / (network_s + inputs_s).max(1e-12),
+                frames: timed,
+            });
+        }
+        Ok(out)
+    }
+}
+
+/// Windows of `batch` frames covering `frames` frames of a clip of `total` frames (a
+/// window that would run past the clip's end starts again at its beginning).
+fn windows(frames: usize, batch: usize, total: usize) -> Vec<Range<usize>> {
+    (0..frames)
+        .step_by(batch.max(1))
+        .map(|a| {
+            let a = a % total.max(1);
+            a..(a + batch).min(total)
+        })
+        .collect()
+}
+
+impl Deformer for Predictor {
+    fn name(&self) -> String {
+        self.config.pooling.label().to_string()
+    }
+
+    fn kind(&self) -> Option<ModelKind> {
+        Some(ModelKind::Multilevel)
+    }
+
+    fn variant(&self) -> BTreeMap<String, String> {
+        let mut v = BTreeMap::from([
+            ("preset".to_string(), self.config.preset.clone()),
+            (
+                "pooling".to_string(),
+                self.config.pooling.name().to_string(),
+            ),
+        ]);
+        if !self.checkpoint.as_os_str().is_empty() {
+            v.insert("checkpoint".into(), self.checkpoint.display().to_string());
+        }
+        v
+    }
+
+    fn animate(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+    ) -> Result<Frames, ModelError> {
+        Predictor::animate(self, garment, body, clip)
+    }
+
+    fn time(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+        batches: &[usize],
+        frames: usize,
+    ) -> Result<Option<Vec<Timing>>, ModelError> {
+        Predictor::time(self, garment, body, clip, batches, frames).map(Some)
     }
 }

@@ -13,7 +13,7 @@ pub struct Case {
     pub body: BodyModel,
     pub betas: Vec<f32>,
     pub garment: TriMesh,
-    pub poses: Vec<[f32; 72]>,
+    pub poses: Vec<weft_body::Pose>,
     pub trans: Vec<[f32; 3]>,
     pub fps: f64,
 }
@@ -31,11 +31,7 @@ pub fn case_with(kind: GarmentKind, vertices: usize, betas: &[f32], frames: usiz
     let mut params = ProceduralParams::new(MotionKind::parse("walk").expect("walk"));
     params.frames = frames;
     let motion = generate(&params).expect("walk");
-    let poses = motion
-        .poses()
-        .iter()
-        .map(|p| std::array::from_fn(|k| p[k / 3][k % 3]))
-        .collect();
+    let poses = motion.poses().to_vec();
     Case {
         body,
         betas: betas.to_vec(),

@@ -6,11 +6,12 @@
 use std::path::PathBuf;
 
 use weft_data::Silent;
-use weft_eval::demo::{run_demo, DemoOptions, StandInSimulator};
+use weft_pipeline::demo::{run_demo, DemoOptions};
+use weft_pipeline::stand_in::StandInSimulator;
 
 #[test]
 fn quick_demo_runs_every_stage_and_resumes() {
-    let out = std::env::temp_dir().join(format!("weft-eval-demo-{}", std::process::id()));
+    let out = std::env::temp_dir().join(format!("weft-pipeline-demo-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     let opts = DemoOptions {
         out: out.clone(),

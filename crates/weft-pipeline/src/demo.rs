@@ -8,32 +8,38 @@
 //! demo again after an interruption, or after it finished, costs only what is missing
 //! plus the evaluation.
 //!
-//! The stages are library calls (weft-data, weft-train, this crate), so the CLI is only
-//! argument parsing and a test can run the same pipeline with a stand-in simulator and a
-//! micro configuration ([`DemoOptions::quick`]).
+//! The stages are the pipeline functions the commands call ([`crate::train`],
+//! [`crate::evaluate`], weft-eval's animation and attribution), so `weft demo` takes the
+//! same path as `weft train`, `weft eval` and `weft animate`, and a test can run it with
+//! a stand-in simulator and a micro configuration ([`DemoOptions::quick`]).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
+use weft_body::PosedSequence;
 use weft_data::{
     generate, DataConfig, GarmentSpec, GenerateOptions, MotionSpec as DataMotion, Progress,
-    SequenceSimulator, SimInput, SimOutcome, Split,
+    SequenceSimulator, Split,
 };
+use weft_eval::animate::{animate, write_animation, MotionSpec};
+use weft_eval::attribution::DEFAULT_SAMPLES;
+use weft_eval::evaluate::{error_and_speed_tables, EvalOptions};
+use weft_eval::explain::explain_vertex;
+use weft_eval::pictures::attribution_map;
+use weft_eval::LBS_NAME;
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_mesh::export::ExportFormat;
-use weft_models::multilevel::predictor::{latest_checkpoint, read_run_config};
-use weft_models::multilevel::{Multilevel, Predictor};
+use weft_models::multilevel::Predictor;
+use weft_models::run::latest_checkpoint;
+use weft_models::Clip;
 use weft_render::{
     render_sequence, Paint, RenderOptions, Report, SceneMesh, View, BODY_COLOR, GARMENT_COLOR,
 };
-use weft_train::{train, MultilevelRun, MultilevelTask, RunOptions};
+use weft_train::{MultilevelRun, RunOptions};
 
-use crate::animate::{animate, flat_poses, write_animation, MotionSpec};
-use crate::baseline::PosedBodies;
-use crate::error::EvalError;
-use crate::evaluate::{error_and_speed_tables, evaluate, write_report, EvalOptions};
-use crate::explain::explain_vertex;
-use crate::pictures::attribution_map;
+use crate::error::{stage, PipelineError};
+use crate::evaluate::evaluate_run;
+use crate::train::train_multilevel;
 
 /// What the demo does.
 #[derive(Clone, Debug)]
@@ -99,13 +105,9 @@ pub fn quick_data_config() -> DataConfig {
     c
 }
 
-fn stage(log: &mut dyn FnMut(&str), n: usize, what: &str) -> Instant {
+fn begin(log: &mut dyn FnMut(&str), n: usize, what: &str) -> Instant {
     log(&format!("[{n}/5] {what}"));
     Instant::now()
-}
-
-fn err<E: std::fmt::Display>(what: &str) -> impl Fn(E) -> EvalError + '_ {
-    move |e| EvalError::Invalid(format!("{what}: {e}"))
 }
 
 /// Runs the demo; `simulator` makes the ground truth (weft-data's `Physics` in the CLI),
@@ -115,14 +117,14 @@ pub fn run_demo(
     simulator: &dyn SequenceSimulator,
     progress: &dyn Progress,
     log: &mut dyn FnMut(&str),
-) -> Result<DemoSummary, EvalError> {
+) -> Result<DemoSummary, PipelineError> {
     let out = &opts.out;
     let data_dir = out.join("data");
     let run_dir = out.join("run");
     let mut seconds = [0.0; 5];
 
     // 1. Data.
-    let t = stage(
+    let t = begin(
         log,
         1,
         &format!(
@@ -143,9 +145,9 @@ pub fn run_demo(
         simulator,
         progress,
     )
-    .map_err(err("generating the dataset"))?;
+    .map_err(stage("generating the dataset"))?;
     if !report.failed.is_empty() {
-        return Err(EvalError::Invalid(format!(
+        return Err(PipelineError::Invalid(format!(
             "{} sequences failed to simulate (see {})",
             report.failed.len(),
             report.manifest_path.display()
@@ -162,12 +164,12 @@ pub fn run_demo(
     seconds[0] = t.elapsed().as_secs_f64();
 
     // 2. Training.
-    let t = stage(
+    let t = begin(
         log,
         2,
         &format!("training the cpu preset in {}", run_dir.display()),
     );
-    let mut cfg = MultilevelRun::preset("cpu").map_err(err("cpu preset"))?;
+    let mut cfg = MultilevelRun::preset("cpu")?;
     if opts.quick {
         cfg.train.steps = 6;
         cfg.train.window = 3;
@@ -182,22 +184,18 @@ pub fn run_demo(
     if resume {
         log("      resuming the run found there");
     }
-    let run = cfg.run_dir(&run_dir).map_err(err("run directory"))?;
-    let device = weft_nn::backend::seeded(&weft_nn::backend::cpu_autodiff(), cfg.train.seed);
-    let mut task = MultilevelTask::from_dataset(&data_dir, &cfg.model, &cfg.train, &device)
-        .map_err(err("loading the training data"))?;
-    let model = Multilevel::new(&cfg.model, &device).map_err(err("building the model"))?;
-    let (_, outcome) = train(
-        &mut task,
-        model,
-        &run,
-        &RunOptions {
-            resume,
-            progress: !opts.quick,
-            session_steps: None,
-        },
-    )
-    .map_err(err("training"))?;
+    let options = RunOptions {
+        resume,
+        progress: !opts.quick,
+        session_steps: None,
+    };
+    let outcome = train_multilevel(&cfg, &data_dir, &run_dir, &options, &mut |line| {
+        log(&format!("      {line}"))
+    })
+    .map_err(|e| PipelineError::Stage {
+        stage: "training".into(),
+        source: Box::new(e),
+    })?;
     log(&format!(
         "      {} steps ({:.1} ms/step this session), validation error {}",
         outcome.steps,
@@ -209,13 +207,12 @@ pub fn run_demo(
     seconds[1] = t.elapsed().as_secs_f64();
 
     // 3. Evaluation.
-    let t = stage(
+    let t = begin(
         log,
         3,
         "evaluating on the test split (unseen garments, shape and motion)",
     );
-    let predictor = Predictor::load(&run_dir).map_err(err("loading the trained run"))?;
-    let dataset = weft_data::Dataset::open(&data_dir).map_err(err("opening the dataset"))?;
+    let dataset = weft_data::Dataset::open(&data_dir).map_err(stage("opening the dataset"))?;
     let eval_opts = EvalOptions {
         fps_frames: if opts.quick { 4 } else { 32 },
         command: format!(
@@ -226,12 +223,11 @@ pub fn run_demo(
         ..EvalOptions::default()
     };
     let mut line = |s: &str| log(&format!("      {s}"));
-    let evaluation = evaluate(&predictor, &run_dir, &dataset, &eval_opts, &mut line)?;
-    let eval_html = write_report(&evaluation, &run_dir.join("report"))?;
+    let (evaluation, eval_html) = evaluate_run(&run_dir, &data_dir, &eval_opts, &mut line)?;
     let r = &evaluation.report;
     let model_mm = r.model().map_or(f64::NAN, |m| m.overall.e_verts_mm.mean);
     let lbs_mm = r
-        .method(crate::LBS_NAME)
+        .method(LBS_NAME)
         .map_or(f64::NAN, |m| m.overall.e_verts_mm.mean);
     log(&format!(
         "      E_verts: model {model_mm:.2} mm, LBS only {lbs_mm:.2} mm ({})",
@@ -244,30 +240,32 @@ pub fn run_demo(
     seconds[2] = t.elapsed().as_secs_f64();
 
     // 4. Animation of an unseen garment on an unseen motion and shape.
-    let t = stage(
+    let t = begin(
         log,
         4,
         "animating an unseen garment on an unseen body shape and motion",
     );
     let anim_dir = out.join("animation");
-    std::fs::create_dir_all(&anim_dir).map_err(|source| EvalError::Io {
+    std::fs::create_dir_all(&anim_dir).map_err(|source| PipelineError::Io {
         path: anim_dir.clone(),
         source,
     })?;
-    let body = dataset.body_model().map_err(err("body model"))?;
+    let body = dataset.body_model()?;
     let betas64: Vec<f64> = UNSEEN_BETAS.iter().map(|&b| f64::from(b)).collect();
     let (kind, seed, vertices) = UNSEEN_GARMENT;
     let vertices = if opts.quick { 320 } else { vertices };
     let garment = FitBody::new(&body, &betas64)
         .and_then(|fit| fit.generate(kind, &Style::from_seed(kind, seed), vertices))
-        .map_err(err("generating the unseen garment"))?
+        .map_err(stage("generating the unseen garment"))?
         .mesh;
     let garment_path = anim_dir.join("garment.obj");
-    weft_mesh::io::write_obj(&garment_path, &garment).map_err(err("writing the garment"))?;
+    weft_mesh::io::write_obj(&garment_path, &garment).map_err(stage("writing the garment"))?;
     let frames = if opts.quick { 6 } else { 60 };
     let motion = MotionSpec::parse(UNSEEN_MOTION, frames, 7, 30.0)?.load(&body, &UNSEEN_BETAS)?;
+    let predictor = Predictor::load(&run_dir)?;
     let animated = animate(&predictor, &garment, &body, &UNSEEN_BETAS, &motion)?;
-    let posed = PosedBodies::new(&body, &UNSEEN_BETAS, &flat_poses(&motion), motion.trans())?;
+    let posed = PosedSequence::new(&body, &UNSEEN_BETAS, motion.poses(), motion.trans())
+        .map_err(stage("posing the body"))?;
     let body_frames: Vec<Vec<[f32; 3]>> = (0..posed.len())
         .filter_map(|t| posed.mesh(t))
         .map(|m| m.positions.iter().map(|p| p.map(|x| x as f32)).collect())
@@ -330,26 +328,19 @@ pub fn run_demo(
     seconds[3] = t.elapsed().as_secs_f64();
 
     // 5. Attribution of one vertex of a test sequence (eq. 9).
-    let t = stage(log, 5, "attribution of one vertex (seed 000 eq. 9)");
-    let samples = if opts.quick {
-        4
-    } else {
-        crate::attribution::DEFAULT_SAMPLES
-    };
-    let config = read_run_config(&run_dir).map_err(err("run config"))?;
-    let checkpoint = latest_checkpoint(&run_dir).map_err(err("checkpoint"))?;
+    let t = begin(log, 5, "attribution of one vertex (seed 000 eq. 9)");
+    let samples = if opts.quick { 4 } else { DEFAULT_SAMPLES };
+    let config = weft_models::multilevel::predictor::read_run_config(&run_dir)?;
+    let checkpoint = latest_checkpoint(&run_dir)?;
     let explainer =
-        Predictor::from_checkpoint(config, &checkpoint, &weft_nn::backend::cpu_autodiff())
-            .map_err(err("loading the model for gradients"))?;
+        Predictor::from_checkpoint(config, &checkpoint, &weft_nn::backend::cpu_autodiff())?;
     let record = dataset
         .records_in(Split::Test)
         .first()
         .copied()
         .cloned()
-        .ok_or_else(|| EvalError::Invalid("the dataset has no test sequence".into()))?;
-    let seq = dataset
-        .load(&record)
-        .map_err(err("loading a test sequence"))?;
+        .ok_or_else(|| PipelineError::Invalid("the dataset has no test sequence".into()))?;
+    let seq = dataset.load(&record)?;
     let frame = seq.poses.len() / 2;
     // The lowest vertex (a hem): where garments swing most.
     let vertex = seq
@@ -359,14 +350,17 @@ pub fn run_demo(
         .enumerate()
         .min_by(|a, b| a.1[1].total_cmp(&b.1[1]))
         .map_or(0, |(i, _)| i);
+    let clip = Clip {
+        betas: &record.betas,
+        poses: &seq.poses,
+        trans: &seq.trans,
+        fps: record.fps,
+    };
     let a = explain_vertex(
         explainer.model(),
         &seq.garment,
         &body,
-        &record.betas,
-        &seq.poses,
-        &seq.trans,
-        record.fps,
+        &clip,
         vertex,
         frame,
         samples,
@@ -454,38 +448,4 @@ pub fn run_demo(
         lbs_mm,
         seconds,
     })
-}
-
-/// A cheap, deterministic stand-in for the simulator: the LBS baseline plus a smooth
-/// vertical sag that varies over time, so the ground truth is neither the baseline nor
-/// constant. For tests and dry runs of the pipeline (data → training → evaluation)
-/// where the real simulator would take minutes; its figures mean nothing.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct StandInSimulator;
-
-impl SequenceSimulator for StandInSimulator {
-    fn simulate(
-        &self,
-        input: &SimInput<'_>,
-        on_frame: &mut dyn FnMut(),
-    ) -> Result<SimOutcome, String> {
-        let betas: Vec<f32> = input.betas.iter().map(|&b| b as f32).collect();
-        let poses = flat_poses(input.motion);
-        let frames = crate::baseline::LbsBaseline::new(input.garment, input.body, &betas)
-            .and_then(|b| b.animate(input.body, &poses, input.motion.trans()))
-            .map_err(|e| e.to_string())?;
-        let frames = frames
-            .into_iter()
-            .enumerate()
-            .map(|(t, f)| {
-                on_frame();
-                let sag = 0.01 * (1.0 + (0.3 * t as f32).sin());
-                f.into_iter().map(|p| [p[0], p[1] - sag, p[2]]).collect()
-            })
-            .collect();
-        Ok(SimOutcome::Finished {
-            frames,
-            stats: serde_json::Value::Null,
-        })
-    }
 }

@@ -1,0 +1,34 @@
+//! [`load_deformer`]: any trained run directory opened as a [`Deformer`], whatever the
+//! system that trained it. The run's header (`model`, written by weft-train) picks the
+//! loader; this is the one `match` on [`ModelKind`] a new system adds an arm to.
+
+use std::path::Path;
+
+use crate::deformer::Deformer;
+use crate::error::ModelError;
+use crate::kind::ModelKind;
+use crate::multilevel::Predictor;
+use crate::run::read_run_config;
+
+/// The trained system in `dir` (its config.toml and latest checkpoint), on the CPU.
+///
+/// Errors name the file: a missing or unreadable config, a format version this build
+/// does not read, a model kind this build cannot run, a checkpoint that does not fit.
+pub fn load_deformer(dir: &Path) -> Result<Box<dyn Deformer + Send>, ModelError> {
+    let (header, _) = read_run_config(dir)?;
+    match header.model {
+        ModelKind::Multilevel => Ok(Box::new(Predictor::load(dir)?)),
+        other => Err(ModelError::Run {
+            path: dir.join("config.toml"),
+            message: format!(
+                "a run of model `{other}`, which this build of weft cannot run yet (it runs: {})",
+                ModelKind::ALL
+                    .iter()
+                    .filter(|k| k.is_implemented())
+                    .map(|k| k.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        }),
+    }
+}

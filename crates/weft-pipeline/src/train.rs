@@ -1,0 +1,133 @@
+//! Training as the CLI and the demo run it: a model kind, a preset overlaid by a config
+//! file and flags, a dataset, a run directory. [`train_run`] is the one place that
+//! dispatches on [`ModelKind`] for training; a new system adds its arm here.
+
+use std::path::{Path, PathBuf};
+
+use weft_models::multilevel::Multilevel;
+use weft_models::ModelKind;
+use weft_nn::backend::{cpu_autodiff, seeded};
+use weft_train::{train, MultilevelRun, MultilevelTask, Outcome, RunOptions, TrainTask};
+
+use crate::error::{stage, PipelineError};
+
+/// What to train, where, and how the configuration is put together.
+#[derive(Clone, Debug)]
+pub struct TrainSpec {
+    /// The system to train.
+    pub model: ModelKind,
+    /// Dataset directory (from `weft data generate`).
+    pub data: PathBuf,
+    /// Run directory to write.
+    pub out: PathBuf,
+    /// Preset name (default: the config file's, else `cpu`).
+    pub preset: Option<String>,
+    /// A TOML file laid over the preset (unknown keys are refused).
+    pub config: Option<PathBuf>,
+    /// Optimiser steps of the whole run (overrides the configuration).
+    pub steps: Option<usize>,
+    /// Seed of initialisation and data order (overrides the configuration).
+    pub seed: Option<u64>,
+    /// Continue the run in `out` from its latest checkpoint.
+    pub resume: bool,
+    /// Draw a progress bar with ETA on stderr.
+    pub progress: bool,
+}
+
+/// Refuses a model kind this build cannot train, naming the ones it can.
+pub fn check_implemented(kind: ModelKind) -> Result<(), PipelineError> {
+    if kind.is_implemented() {
+        return Ok(());
+    }
+    let built: Vec<&str> = ModelKind::ALL
+        .iter()
+        .filter(|k| k.is_implemented())
+        .map(|k| k.name())
+        .collect();
+    Err(PipelineError::Invalid(format!(
+        "model `{kind}` is not implemented in this build of weft yet; available: {}",
+        built.join(", ")
+    )))
+}
+
+/// The configuration of `kind` at `preset` (every default written out) as the
+/// config.toml a run would hold: what `weft config show` prints.
+pub fn preset_toml(kind: ModelKind, preset: &str) -> Result<String, PipelineError> {
+    check_implemented(kind)?;
+    match kind {
+        ModelKind::Multilevel => Ok(MultilevelRun::preset(preset)?.to_toml()?),
+        _ => unreachable!("refused by check_implemented"),
+    }
+}
+
+/// Trains `spec.model`; `log` gets a line describing the run before it starts.
+pub fn train_run(spec: &TrainSpec, log: &mut dyn FnMut(&str)) -> Result<Outcome, PipelineError> {
+    check_implemented(spec.model)?;
+    match spec.model {
+        ModelKind::Multilevel => {
+            let cfg = resolve_multilevel(spec)?;
+            let options = RunOptions {
+                resume: spec.resume,
+                progress: spec.progress,
+                session_steps: None,
+            };
+            train_multilevel(&cfg, &spec.data, &spec.out, &options, log)
+        }
+        _ => unreachable!("refused by check_implemented"),
+    }
+}
+
+/// The Multilevel configuration of `spec`: a resumed run's own config.toml when nothing
+/// else is given, else the preset with the file and the flags laid over it.
+pub fn resolve_multilevel(spec: &TrainSpec) -> Result<MultilevelRun, PipelineError> {
+    let explicit = spec.preset.is_some()
+        || spec.config.is_some()
+        || spec.steps.is_some()
+        || spec.seed.is_some();
+    let mut cfg = if spec.resume && !explicit {
+        MultilevelRun::from_run_dir(&spec.out)?
+    } else {
+        MultilevelRun::resolve(spec.preset.as_deref(), spec.config.as_deref())?
+    };
+    if let Some(steps) = spec.steps {
+        cfg.train.steps = steps;
+    }
+    if let Some(seed) = spec.seed {
+        cfg.train.seed = seed;
+    }
+    cfg.train.validate()?;
+    Ok(cfg)
+}
+
+/// Trains the Multilevel model of `cfg` on the dataset in `data` into `out`.
+pub fn train_multilevel(
+    cfg: &MultilevelRun,
+    data: &Path,
+    out: &Path,
+    options: &RunOptions,
+    log: &mut dyn FnMut(&str),
+) -> Result<Outcome, PipelineError> {
+    if !data.is_dir() {
+        return Err(PipelineError::Invalid(format!(
+            "{}: no such dataset directory (make one with `weft data generate`)",
+            data.display()
+        )));
+    }
+    let run = cfg.run_dir(out)?;
+    let device = seeded(&cpu_autodiff(), cfg.train.seed);
+    let mut task = MultilevelTask::from_dataset(data, &cfg.model, &cfg.train, &device).map_err(
+        stage(&format!("loading the training data {}", data.display())),
+    )?;
+    let model = Multilevel::new(&cfg.model, &device)?;
+    log(&format!(
+        "training multilevel ({} preset) on {} sequences ({} windows of {} frames per epoch), {} steps -> {}",
+        cfg.preset,
+        task.sequence_count(),
+        task.item_count(),
+        cfg.train.window,
+        cfg.train.steps,
+        out.display()
+    ));
+    let (_, outcome) = train(&mut task, model, &run, options)?;
+    Ok(outcome)
+}
