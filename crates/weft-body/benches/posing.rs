@@ -4,6 +4,9 @@
 //!
 //! `cargo bench -p weft-body --bench posing`
 
+// criterion_group! defines an undocumented public function.
+#![allow(missing_docs)]
+
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use weft_body::{default_body, Skinning};
 use weft_motion::{generate, MotionKind, ProceduralParams};

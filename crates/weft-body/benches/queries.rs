@@ -11,6 +11,9 @@
 //! the hips and thighs. Frames are posed without root translation so that it stays
 //! around the body.
 
+// criterion_group! defines an undocumented public function.
+#![allow(missing_docs)]
+
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use weft_body::features::{
     transfer_weights, transfer_weights_diffused, DiffusionParams, VolumetricDistance,

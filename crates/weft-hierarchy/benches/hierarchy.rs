@@ -1,6 +1,9 @@
 //! Hierarchy construction (3 levels, mesh graph included) on grids and open cylinders of
 //! about 10k, 100k and 1M vertices. Figures go to docs/benchmarks.md.
 
+// criterion_group! defines an undocumented public function.
+#![allow(missing_docs)]
+
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use weft_hierarchy::Hierarchy;
 use weft_mesh::primitives::{cylinder, grid};

@@ -4,16 +4,19 @@
 //! tensors and files without copies; these helpers keep the arithmetic readable. Shared
 //! by every geometry crate so there is one copy of each.
 
+/// `a − b`.
 #[inline]
 pub fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
+/// `a + b`.
 #[inline]
 pub fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
+/// `s·a`.
 #[inline]
 pub fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
     [a[0] * s, a[1] * s, a[2] * s]
@@ -25,11 +28,13 @@ pub fn add_scaled(a: [f64; 3], b: [f64; 3], s: f64) -> [f64; 3] {
     [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]]
 }
 
+/// `a · b`.
 #[inline]
 pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// `a × b` (right-handed).
 #[inline]
 pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
@@ -39,16 +44,19 @@ pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
+/// `|a|²`.
 #[inline]
 pub fn norm_sq(a: [f64; 3]) -> f64 {
     dot(a, a)
 }
 
+/// `|a|`.
 #[inline]
 pub fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
 
+/// `|a − b|`.
 #[inline]
 pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     norm(sub(a, b))
@@ -65,6 +73,7 @@ pub fn normalize_or_zero(a: [f64; 3]) -> [f64; 3] {
     }
 }
 
+/// Whether every component is finite.
 #[inline]
 pub fn is_finite(a: [f64; 3]) -> bool {
     a.iter().all(|c| c.is_finite())

@@ -7,6 +7,9 @@
 //! training binary would call it; set `WEFT_MALLOC_DEFAULTS=1` to measure with glibc's
 //! default trimming instead.
 
+// criterion_group! defines an undocumented public function.
+#![allow(missing_docs)]
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use weft_mesh::primitives::builtin_garment;
 use weft_nn::backend::{cpu, cpu_autodiff};

@@ -3,6 +3,9 @@
 //! colour map, at the default 2 × 2 supersampling and without it. Figures go to
 //! docs/benchmarks.md.
 
+// criterion_group! defines an undocumented public function.
+#![allow(missing_docs)]
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use weft_render::{
     render, Colormap, Paint, RenderOptions, ScalarPaint, ScalarRange, SceneMesh, BODY_COLOR,

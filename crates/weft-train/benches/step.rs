@@ -7,6 +7,9 @@
 //!
 //! `cargo bench -p weft-train --bench step`
 
+// criterion_group! defines an undocumented public function.
+#![allow(missing_docs)]
+
 use std::time::Duration;
 
 use burn::module::Module;
