@@ -20,7 +20,7 @@ use weft_body::{BodyModel, ShapedBody, Skinning};
 use weft_mesh::TriMesh;
 
 use crate::deformer::{Clip, Deformer, Frames};
-use crate::error::ModelError;
+use crate::error::{body_err, ModelError};
 use crate::kind::ModelKind;
 
 /// Name of the LBS baseline in tables.
@@ -38,13 +38,6 @@ pub struct SkinnedGarment {
     rest: Vec<[f64; 3]>,
     weights: SkinWeights,
     shaped: ShapedBody,
-}
-
-fn body_err(what: &str) -> impl Fn(weft_body::BodyError) -> ModelError + '_ {
-    move |source| ModelError::BodyModel {
-        what: what.to_string(),
-        source: Box::new(source),
-    }
 }
 
 impl SkinnedGarment {

@@ -118,3 +118,11 @@ pub(crate) fn check_finite(what: &'static str, values: &[f32]) -> Result<(), Mod
         None => Ok(()),
     }
 }
+
+/// A [`ModelError::BodyModel`] naming what was being computed, for `map_err`.
+pub(crate) fn body_err(what: &str) -> impl Fn(weft_body::BodyError) -> ModelError + '_ {
+    move |source| ModelError::BodyModel {
+        what: what.to_string(),
+        source: Box::new(source),
+    }
+}

@@ -114,7 +114,7 @@ impl FrameInputs {
             .map_err(|e| ModelError::Body(format!("motion: {e}")))?;
         let shaped = body
             .shaped(&betas_f64(betas)?)
-            .map_err(|e| ModelError::Body(e.to_string()))?;
+            .map_err(crate::error::body_err("shaping the body"))?;
 
         let t_count = frames.len();
         let fps32 = fps as f32;

@@ -153,7 +153,7 @@ impl GarmentInput {
         }
         let shaped = body
             .shaped(&betas_f64(betas)?)
-            .map_err(|e| ModelError::Body(e.to_string()))?;
+            .map_err(crate::error::body_err("shaping the body"))?;
         let s = cfg.joints;
         let pelvis = shaped.joints[0];
 
