@@ -105,7 +105,7 @@ fn train_writes_a_run_resumes_and_refuses_mismatches() {
     let (out, err) = (stdout(&o), stderr(&o));
     assert!(o.status.success(), "{err}");
     assert!(out.contains("trained 3 steps"), "{out}");
-    assert!(out.contains("validation mean vertex error"), "{out}");
+    assert!(out.contains("validation: e_verts_mm "), "{out}");
     for f in [
         "config.toml",
         "metrics.jsonl",

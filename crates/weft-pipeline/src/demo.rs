@@ -171,14 +171,14 @@ pub fn run_demo(
     );
     let mut cfg = MultilevelRun::preset("cpu")?;
     if opts.quick {
-        cfg.train.steps = 6;
-        cfg.train.window = 3;
-        cfg.train.checkpoint_every = 3;
-        cfg.train.validate_every = 3;
-        cfg.train.validation_windows = 1;
+        cfg.train.trainer.steps = 6;
+        cfg.train.task.window = 3;
+        cfg.train.trainer.checkpoint_every = 3;
+        cfg.train.trainer.validate_every = 3;
+        cfg.train.task.validation_windows = 1;
     }
     if let Some(s) = opts.steps {
-        cfg.train.steps = s;
+        cfg.train.trainer.steps = s;
     }
     let resume = run_dir.join("checkpoints").join("latest").is_file();
     if resume {
@@ -197,12 +197,10 @@ pub fn run_demo(
         source: Box::new(e),
     })?;
     log(&format!(
-        "      {} steps ({:.1} ms/step this session), validation error {}",
+        "      {} steps ({:.1} ms/step this session), validation {}",
         outcome.steps,
         outcome.mean_step_ms,
-        outcome
-            .validation_mm
-            .map_or("not measured".to_owned(), |v| format!("{v:.2} mm"))
+        weft_train::metrics::describe(&outcome.validation)
     ));
     seconds[1] = t.elapsed().as_secs_f64();
 

@@ -90,12 +90,12 @@ pub fn resolve_multilevel(spec: &TrainSpec) -> Result<MultilevelRun, PipelineErr
         MultilevelRun::resolve(spec.preset.as_deref(), spec.config.as_deref())?
     };
     if let Some(steps) = spec.steps {
-        cfg.train.steps = steps;
+        cfg.train.trainer.steps = steps;
     }
     if let Some(seed) = spec.seed {
-        cfg.train.seed = seed;
+        cfg.train.trainer.seed = seed;
     }
-    cfg.train.validate()?;
+    cfg.train.trainer.validate()?;
     Ok(cfg)
 }
 
@@ -114,18 +114,19 @@ pub fn train_multilevel(
         )));
     }
     let run = cfg.run_dir(out)?;
-    let device = seeded(&cpu_autodiff(), cfg.train.seed);
-    let mut task = MultilevelTask::from_dataset(data, &cfg.model, &cfg.train, &device).map_err(
-        stage(&format!("loading the training data {}", data.display())),
-    )?;
+    let device = seeded(&cpu_autodiff(), cfg.train.trainer.seed);
+    let mut task =
+        MultilevelTask::from_dataset(data, &cfg.model, &cfg.train.task, &device).map_err(stage(
+            &format!("loading the training data {}", data.display()),
+        ))?;
     let model = Multilevel::new(&cfg.model, &device)?;
     log(&format!(
         "training multilevel ({} preset) on {} sequences ({} windows of {} frames per epoch), {} steps -> {}",
         cfg.preset,
         task.sequence_count(),
         task.item_count(),
-        cfg.train.window,
-        cfg.train.steps,
+        cfg.train.task.window,
+        cfg.train.trainer.steps,
         out.display()
     ));
     let (_, outcome) = train(&mut task, model, &run, options)?;

@@ -12,7 +12,6 @@
 
 use std::time::Duration;
 
-use burn::module::Module;
 use burn::optim::GradientsParams;
 use criterion::{criterion_group, criterion_main, Criterion};
 use weft_garment::{FitBody, GarmentKind, Style};
@@ -20,9 +19,8 @@ use weft_models::multilevel::{Multilevel, MultilevelConfig};
 use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_nn::backend::{cpu_autodiff, retain_freed_memory, seeded};
 use weft_nn::AdamaxConfig;
-use weft_train::loss::Term;
-use weft_train::multilevel::carried_sequence;
-use weft_train::{MultilevelTask, Phase, TrainConfig, TrainTask};
+use weft_train::tasks::multilevel::{carried_sequence, Phase, ScheduleState, Term};
+use weft_train::{MultilevelTask, MultilevelTraining, TrainTask};
 
 const VERTICES: usize = 4000;
 
@@ -48,9 +46,9 @@ fn task(model: &MultilevelConfig, window: usize) -> MultilevelTask {
         motion.trans().to_vec(),
         motion.fps(),
     );
-    let cfg = TrainConfig {
+    let cfg = MultilevelTraining {
         window,
-        ..TrainConfig::default()
+        ..MultilevelTraining::default()
     };
     MultilevelTask::new(model, &cfg, body, vec![seq], Vec::new(), &cpu_autodiff()).expect("task")
 }
@@ -97,9 +95,11 @@ fn bench(c: &mut Criterion) {
     let cfg = MultilevelConfig::paper();
     let mut t = task(&cfg, 1);
     let model = Multilevel::new(&cfg, &seeded(&cpu_autodiff(), 0)).expect("model");
-    let group_ids = t.physics_group(&model);
-    let mut model = model.no_grad().set_require_grad_group(group_ids, true);
-    t.on_phase(Phase::Physics);
+    let stage = ScheduleState {
+        phase: Phase::Physics,
+        ..ScheduleState::default()
+    };
+    let mut model = t.enter_stage(model, &stage);
     let mut optim = AdamaxConfig::new().init();
     group.bench_function("paper/frames=1/supervised/second-submodule-only", |b| {
         b.iter(|| {

@@ -1,16 +1,19 @@
-//! The training configuration (the `[train]` table of a run's config.toml), with every
-//! default written here and printed by `weft config show`.
+//! The training loop's configuration, the same for every system, with every default
+//! written here and printed by `weft config show`; and [`TrainTable`], the `[train]` table
+//! of a run's config.toml, which holds it beside the task's own settings.
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, TrainError};
-use crate::loss::TermWeights;
 use crate::optim::{LrScheduleConfig, OptimizerConfig};
-use crate::schedule::ScheduleConfig;
 
-/// Training hyper-parameters; [`TrainConfig::preset`] gives the `cpu` and `paper` ones.
+/// The loop's hyper-parameters; [`TrainConfig::preset`] gives the `cpu` and `paper` ones.
+///
+/// It does not refuse unknown fields itself: it shares the `[train]` table with the
+/// task's settings ([`TrainTable`]), and unknown keys are refused on the whole table by
+/// `weft_config::overlay`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(default)]
 pub struct TrainConfig {
     /// Seeds parameter initialisation and the order of the training windows.
     pub seed: u64,
@@ -28,25 +31,16 @@ pub struct TrainConfig {
     /// Keep this many newest checkpoints (the one `latest` names always stays); 0: keep
     /// every checkpoint.
     pub keep_checkpoints: usize,
-    /// Consecutive frames per training window (the frames of a window share one pair
-    /// encoding and form one batch for the network).
-    pub window: usize,
-    /// Windows per optimiser step (their losses are averaged).
+    /// Training items per optimiser step (their losses are averaged).
     pub batch: usize,
     /// Write a checkpoint every this many steps (and always at the end).
     pub checkpoint_every: usize,
     /// Measure the validation error every this many steps (and at the end); 0: never.
     pub validate_every: usize,
-    /// At most this many validation windows per measurement (spread over the split).
-    pub validation_windows: usize,
     /// Stop when this many steps in a row had a non-finite loss.
     pub max_non_finite: usize,
     /// Clip gradients to this global L2 norm (none: no clipping; the paper names none).
     pub grad_clip_norm: Option<f64>,
-    /// Loss weights of supplement §2.
-    pub weights: TermWeights,
-    /// The two-step schedule of supplement §4.
-    pub schedule: ScheduleConfig,
 }
 
 impl Default for TrainConfig {
@@ -59,15 +53,11 @@ impl Default for TrainConfig {
             optimizer: OptimizerConfig::default(),
             lr_schedule: LrScheduleConfig::default(),
             keep_checkpoints: 3,
-            window: 8,
             batch: 1,
             checkpoint_every: 250,
             validate_every: 250,
-            validation_windows: 12,
             max_non_finite: 20,
             grad_clip_norm: None,
-            weights: TermWeights::cpu(),
-            schedule: ScheduleConfig::cpu(),
         }
     }
 }
@@ -76,22 +66,17 @@ impl Default for TrainConfig {
 pub const PRESETS: [&str; 2] = ["cpu", "paper"];
 
 impl TrainConfig {
-    /// The training side of a preset: `cpu` (the default above: short windows, one per
-    /// step, sized to train the tiny dataset in minutes on two cores, [`TermWeights::cpu`],
-    /// [`ScheduleConfig::cpu`]) or `paper` (batch 64 frames as 4 windows of 16, seed 000
-    /// supp. §4, the printed loss weights and switching rules, and a longer run).
+    /// The loop side of a preset: `cpu` (the default above: one item per step, sized to
+    /// train the tiny dataset in minutes on two cores) or `paper` (4 items per step, seed
+    /// 000 supp. §4, and a longer run).
     pub fn preset(name: &str) -> Result<Self> {
         match name {
             "cpu" => Ok(TrainConfig::default()),
             "paper" => Ok(TrainConfig {
                 steps: 20_000,
-                window: 16,
                 batch: 4,
                 checkpoint_every: 1000,
                 validate_every: 1000,
-                validation_windows: 64,
-                weights: TermWeights::default(),
-                schedule: ScheduleConfig::default(),
                 ..TrainConfig::default()
             }),
             other => Err(TrainError::config(
@@ -106,7 +91,6 @@ impl TrainConfig {
     pub fn validate(&self) -> Result<()> {
         for (field, v) in [
             ("train.steps", self.steps),
-            ("train.window", self.window),
             ("train.batch", self.batch),
             ("train.checkpoint_every", self.checkpoint_every),
             ("train.max_non_finite", self.max_non_finite),
@@ -142,10 +126,20 @@ impl TrainConfig {
             }
         }
         self.optimizer.validate()?;
-        self.lr_schedule.validate()?;
-        self.weights.validate()?;
-        self.schedule.validate()
+        self.lr_schedule.validate()
     }
+}
+
+/// The `[train]` table of a run: the loop's settings and the task's own (`C`, e.g.
+/// Multilevel's windows, loss weights and schedule) side by side, as one flat table.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrainTable<C> {
+    /// The loop's settings.
+    #[serde(flatten)]
+    pub trainer: TrainConfig,
+    /// The task's settings.
+    #[serde(flatten)]
+    pub task: C,
 }
 
 #[cfg(test)]
@@ -162,12 +156,11 @@ mod tests {
             assert_eq!(back, c);
         }
         assert!(TrainConfig::preset("gpu").is_err());
-        // Missing fields take their defaults; unknown ones are refused.
-        let partial: TrainConfig = toml::from_str("steps = 7\n[weights]\nvertex = 2.0\n").unwrap();
+        // Missing fields take their defaults (unknown ones are refused on the whole
+        // `[train]` table: tasks::multilevel's config tests).
+        let partial: TrainConfig = toml::from_str("steps = 7\n").unwrap();
         assert_eq!(partial.steps, 7);
-        assert_eq!(partial.weights.vertex, 2.0);
-        assert_eq!(partial.weights.edge, 15.0);
-        assert!(toml::from_str::<TrainConfig>("stepz = 7\n").is_err());
+        assert_eq!(partial.batch, TrainConfig::default().batch);
         let e = toml::from_str::<TrainConfig>("[optimizer]\nkind = \"adam\"\nbeta_3 = 0.5\n")
             .unwrap_err()
             .to_string();

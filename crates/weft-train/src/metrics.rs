@@ -1,9 +1,9 @@
 //! The metrics log (`RUN/metrics.jsonl`, one JSON object per line) and the training
 //! curves drawn from it (`RUN/curves.png`, through weft-render's plot API).
 //!
-//! A line per optimiser step: step, epoch, phase, learning rate, the weighted total and
-//! every evaluated term unweighted, the step's wall time, and the validation error (mm)
-//! on the steps that measured it. Steps whose loss was not finite get a line with
+//! A line per optimiser step: step, epoch, the task's stage, learning rate, the weighted
+//! total and every evaluated term unweighted, the step's wall time, and the task's named
+//! validation metrics on the steps that measured them. Steps whose loss was not finite get a line with
 //! `"event": "non_finite"` and the offending term. On resume the log is cut back to the
 //! checkpoint's step, so it reads as if the run had never stopped.
 
@@ -17,6 +17,7 @@ use weft_mesh::io::write_atomic;
 use weft_render::{Image, LinePlot, Series};
 
 use crate::error::{Result, TrainError};
+use crate::task::Metrics;
 
 /// One line of metrics.jsonl.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -25,8 +26,9 @@ pub struct Record {
     pub step: usize,
     /// The epoch the step belongs to.
     pub epoch: usize,
-    /// The schedule phase.
-    pub phase: String,
+    /// The task's stage (`phase` in logs written before tasks owned their stages).
+    #[serde(alias = "phase")]
+    pub stage: String,
     /// The learning rate of the step.
     pub lr: f64,
     /// The weighted total loss.
@@ -35,11 +37,11 @@ pub struct Record {
     pub terms: BTreeMap<String, f64>,
     /// Wall time of the step, ms.
     pub step_ms: f64,
-    /// Mean vertex error on the validation split, mm (steps that measured it).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub validation_mm: Option<f64>,
+    /// The validation metrics (steps that measured them).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub validation: Metrics,
     /// `start` for the validation before the first step (step 0), `non_finite` for a
-    /// skipped step, `phase:<name>` when the schedule switched.
+    /// skipped step, `stage:<name>` when the task's stage changed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub event: Option<String>,
     /// The term that was not finite, for `non_finite`.
@@ -122,12 +124,24 @@ impl MetricsLog {
     }
 
     /// Draws the loss terms (log scale, smoothed over epochs of `smooth` steps) and the
-    /// validation error into one picture and writes it to `path` atomically.
+    /// validation metrics into one picture and writes it to `path` atomically.
     pub fn write_curves(&self, path: &Path, smooth: usize) -> Result<()> {
         let image = curves(&self.records, smooth)?;
         let png = image.encode_png()?;
         write_atomic(path, |w| w.write_all(&png)).map_err(|e| TrainError::io(path, e))
     }
+}
+
+/// Validation metrics for a log line: `e_verts_mm 44.61, …`, or `not measured`.
+pub fn describe(metrics: &Metrics) -> String {
+    if metrics.is_empty() {
+        return "not measured".into();
+    }
+    metrics
+        .iter()
+        .map(|(k, v)| format!("{k} {v:.2}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn line_of(r: &Record) -> Result<String> {
@@ -155,7 +169,7 @@ fn smoothed(points: &[(f64, f64)], window: usize) -> Vec<(f64, f64)> {
     out
 }
 
-/// The curves picture: losses on top, validation error below.
+/// The curves picture: losses on top, validation metrics below.
 pub fn curves(records: &[Record], smooth: usize) -> Result<Image> {
     let steps: Vec<&Record> = records
         .iter()
@@ -188,15 +202,23 @@ pub fn curves(records: &[Record], smooth: usize) -> Result<Image> {
         series,
         log_y: true,
     };
-    let val: Vec<(f64, f64)> = records
-        .iter()
-        .filter_map(|r| r.validation_mm.map(|v| (r.step as f64, v)))
-        .collect();
+    let mut metrics: Vec<&String> = records.iter().flat_map(|r| r.validation.keys()).collect();
+    metrics.sort();
+    metrics.dedup();
     let validation = LinePlot {
-        title: "validation: mean vertex error".into(),
+        title: "validation".into(),
         x_label: "step".into(),
-        y_label: "mm".into(),
-        series: vec![Series::new("E_verts", val)],
+        y_label: "metric".into(),
+        series: metrics
+            .into_iter()
+            .map(|name| {
+                let pts = records
+                    .iter()
+                    .filter_map(|r| r.validation.get(name).map(|&v| (r.step as f64, v)))
+                    .collect();
+                Series::new(name.clone(), pts)
+            })
+            .collect(),
         log_y: false,
     };
     let (w, h) = (960, 420);
@@ -216,12 +238,16 @@ mod tests {
         Record {
             step,
             epoch: step / 4,
-            phase: "supervised".into(),
+            stage: "supervised".into(),
             lr: 1e-3,
             loss,
             terms: [("vertex".to_string(), loss / 100.0)].into_iter().collect(),
             step_ms: 3.0,
-            validation_mm: step.is_multiple_of(5).then_some(10.0 / step as f64),
+            validation: step
+                .is_multiple_of(5)
+                .then(|| ("e_verts_mm".to_string(), 10.0 / step as f64))
+                .into_iter()
+                .collect(),
             event: None,
             term: None,
         }

@@ -30,15 +30,16 @@ pub use weft_models::run::FORMAT_VERSION;
 use weft_models::run::{RunHeader, RunLayout};
 use weft_models::ModelKind;
 
-use crate::config::TrainConfig;
+use crate::config::{TrainConfig, TrainTable};
 use crate::error::{Result, TrainError};
 use crate::optim::LrState;
 use crate::sampler::Cursor;
-use crate::schedule::ScheduleState;
+use crate::task::Metrics;
 
-/// Everything besides parameters and optimizer state that a resumed run needs.
+/// Everything besides parameters and optimizer state that a resumed run needs; `S` is
+/// the task's stage.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TrainerState {
+pub struct TrainerState<S> {
     /// [`FORMAT_VERSION`] of the writer.
     pub format_version: i64,
     /// The preset of the run.
@@ -50,16 +51,19 @@ pub struct TrainerState {
     pub step: usize,
     /// The data cursor.
     pub cursor: Cursor,
-    /// The two-step schedule.
-    pub schedule: ScheduleState,
+    /// The task's stage (`schedule` in checkpoints written before tasks owned it).
+    #[serde(alias = "schedule")]
+    pub stage: S,
     /// The learning-rate schedule's state (the plateau schedule's rate and patience;
     /// absent in checkpoints written before it existed).
     #[serde(default)]
     pub lr: LrState,
     /// Non-finite steps in a row at the time of the checkpoint.
     pub non_finite_in_a_row: usize,
-    /// The last validation error, mm.
-    pub validation_mm: Option<f64>,
+    /// The last validation metrics (empty before the first, and in checkpoints written
+    /// before metrics were named).
+    #[serde(default)]
+    pub validation: Metrics,
 }
 
 /// A run directory; see the module documentation.
@@ -69,6 +73,7 @@ pub struct RunDir {
     header: RunHeader,
     model_toml: toml::Table,
     train: TrainConfig,
+    train_toml: toml::Table,
 }
 
 /// `value` as a TOML table.
@@ -109,20 +114,22 @@ fn first_difference(
 
 impl RunDir {
     /// The run of model `kind` at `root` for `preset`, model configuration `model` and
-    /// training configuration `train` (nothing is written yet).
-    pub fn new<M: Serialize>(
+    /// training configuration `train` (the loop's and the task's; nothing is written
+    /// yet).
+    pub fn new<M: Serialize, C: Serialize>(
         root: &Path,
         kind: ModelKind,
         preset: &str,
         model: &M,
-        train: &TrainConfig,
+        train: &TrainTable<C>,
     ) -> Result<Self> {
-        train.validate()?;
+        train.trainer.validate()?;
         Ok(RunDir {
             layout: RunLayout::new(root),
             header: RunHeader::new(kind, preset),
             model_toml: to_table("model config", model)?,
-            train: train.clone(),
+            train: train.trainer.clone(),
+            train_toml: to_table("train config", train)?,
         })
     }
 
@@ -136,7 +143,7 @@ impl RunDir {
         &self.layout
     }
 
-    /// The training configuration.
+    /// The loop's configuration.
     pub fn train(&self) -> &TrainConfig {
         &self.train
     }
@@ -158,7 +165,7 @@ impl RunDir {
 
     /// The config.toml text of this run.
     pub fn config_text(&self) -> Result<String> {
-        config_text(&self.header, &self.model_toml, &self.train)
+        config_text(&self.header, &self.model_toml, &self.train_toml)
     }
 
     /// Starts a fresh run: refuses a directory that already holds a checkpoint (resume it
@@ -226,7 +233,11 @@ impl RunDir {
 
     /// The config.toml of this run as a table.
     fn tables(&self) -> Result<toml::Table> {
-        config_table(&self.header, &self.model_toml, &self.train)
+        Ok(config_table(
+            &self.header,
+            &self.model_toml,
+            &self.train_toml,
+        ))
     }
 
     /// The file name stem of the checkpoint at `step`.
@@ -236,11 +247,11 @@ impl RunDir {
 
     /// Writes the checkpoint of `state.step`: model record, optimizer record, state, then
     /// `latest`.
-    pub fn save<M: Module + Clone>(
+    pub fn save<M: Module + Clone, S: Serialize>(
         &self,
         model: &M,
         optim: &ModuleOptimizer,
-        state: &TrainerState,
+        state: &TrainerState<S>,
     ) -> Result<PathBuf> {
         let dir = self.checkpoints();
         std::fs::create_dir_all(&dir).map_err(|e| TrainError::io(&dir, e))?;
@@ -305,11 +316,11 @@ impl RunDir {
 
     /// Loads the latest checkpoint into `fresh` (a model of this run's configuration) and
     /// `optim` (a fresh optimiser); checks the state's version, preset and model table.
-    pub fn load<M: Module>(
+    pub fn load<M: Module, S: DeserializeOwned>(
         &self,
         fresh: M,
         optim: ModuleOptimizer,
-    ) -> Result<(M, ModuleOptimizer, TrainerState)> {
+    ) -> Result<(M, ModuleOptimizer, TrainerState<S>)> {
         let stem = self.latest()?.ok_or_else(|| TrainError::RunDir {
             path: self.root().to_path_buf(),
             message:
@@ -317,7 +328,7 @@ impl RunDir {
                     .into(),
         })?;
         let state_path = self.layout.state(&stem);
-        let state: TrainerState = read_json(&state_path)?;
+        let state: TrainerState<S> = read_json(&state_path)?;
         if state.format_version != FORMAT_VERSION {
             return Err(TrainError::Mismatch {
                 path: state_path,
@@ -379,26 +390,19 @@ fn record_err(path: &Path, source: burn::store::RecordError) -> TrainError {
 }
 
 /// config.toml as a table: the header, `[model]`, `[train]`.
-fn config_table(
-    header: &RunHeader,
-    model: &toml::Table,
-    train: &TrainConfig,
-) -> Result<toml::Table> {
+fn config_table(header: &RunHeader, model: &toml::Table, train: &toml::Table) -> toml::Table {
     let mut t = toml::Table::new();
     header.insert_into(&mut t);
     t.insert("model".into(), toml::Value::Table(model.clone()));
-    t.insert(
-        "train".into(),
-        toml::Value::Table(to_table("train config", train)?),
-    );
-    Ok(t)
+    t.insert("train".into(), toml::Value::Table(train.clone()));
+    t
 }
 
 /// The text of a run's config.toml: the header (format version, model kind, preset),
 /// `[model]`, `[train]` (what `weft config show` prints and `weft train --config` reads
 /// back).
-pub fn config_text(header: &RunHeader, model: &toml::Table, train: &TrainConfig) -> Result<String> {
-    toml::to_string(&config_table(header, model, train)?).map_err(|e| TrainError::Write {
+pub fn config_text(header: &RunHeader, model: &toml::Table, train: &toml::Table) -> Result<String> {
+    toml::to_string(&config_table(header, model, train)).map_err(|e| TrainError::Write {
         what: "config.toml".into(),
         source: Box::new(e),
     })

@@ -1,9 +1,9 @@
 //! The training loop, generic over what is trained ([`TrainTask`]): the configured
-//! optimiser and learning-rate schedule ([`crate::optim`]), the two-step schedule,
+//! optimiser and learning-rate schedule ([`crate::optim`]), the task's stages,
 //! checkpoints (the newest `keep_checkpoints` kept), the metrics log, the progress bar and
 //! the non-finite guard.
 //!
-//! One step: take `batch` items from the sampler, evaluate the phase's loss terms for
+//! One step: take `batch` items from the sampler, evaluate the stage's loss terms for
 //! each, check every term is finite on the host, back-propagate the weighted mean, step
 //! the optimizer. When a term is not finite the step is skipped and reported (step,
 //! term), the model and optimizer go back to the last state whose loss was finite, and
@@ -13,47 +13,18 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use burn::module::{Module, ParamGroup};
+use burn::module::Module;
 use burn::optim::{GradientsParams, ModuleOptimizer};
 use burn::tensor::Tensor;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::config::TrainConfig;
 use crate::error::{Result, TrainError};
-use crate::loss::Term;
 use crate::metrics::{MetricsLog, Record};
 use crate::optim::{LrSchedule, LrState};
 use crate::run::{RunDir, TrainerState, FORMAT_VERSION};
 use crate::sampler::{Cursor, Sampler};
-use crate::schedule::{Phase, ScheduleState};
-
-/// What the loop trains: a model, its training items and its losses.
-pub trait TrainTask {
-    /// The network (a burn module on an autodiff device).
-    type Model: Module + Clone;
-
-    /// Training items (windows of frames) per epoch.
-    fn item_count(&self) -> usize;
-
-    /// The unweighted loss terms `terms` of item `item` under `model`, each a `[1]`
-    /// tensor, in the order asked.
-    fn losses(
-        &mut self,
-        model: &Self::Model,
-        item: usize,
-        terms: &[Term],
-    ) -> Result<Vec<Tensor<1>>>;
-
-    /// Mean vertex error on the validation split, mm (`model` is in validation mode).
-    fn validate(&mut self, model: &Self::Model) -> Result<f64>;
-
-    /// The parameters step 2 trains (the second M^mp submodule for Multilevel).
-    fn physics_group(&self, model: &Self::Model) -> ParamGroup;
-
-    /// Called when the phase changes, before the next step (e.g. to cache encodings that
-    /// frozen parameters make constant).
-    fn on_phase(&mut self, _phase: Phase) {}
-}
+use crate::task::{LossTerm, Metrics, StepEnd, TrainTask};
 
 /// How to run (not part of the run's configuration).
 #[derive(Clone, Debug, Default)]
@@ -74,24 +45,14 @@ pub struct Outcome {
     pub steps: usize,
     /// Steps skipped for a non-finite loss.
     pub skipped: usize,
-    /// The phase at the end.
-    pub phase: Phase,
-    /// The last validation error, mm.
-    pub validation_mm: Option<f64>,
+    /// The name of the task's stage at the end.
+    pub stage: String,
+    /// The last validation metrics (empty when validation is off).
+    pub validation: Metrics,
     /// Mean step time of this session, ms.
     pub mean_step_ms: f64,
     /// The last checkpoint written.
     pub checkpoint: std::path::PathBuf,
-}
-
-/// Freezes everything but the step-2 group when `phase` asks for it.
-fn apply_phase<T: TrainTask>(task: &T, model: T::Model, phase: Phase) -> T::Model {
-    if phase.is_frozen() {
-        let group = task.physics_group(&model);
-        model.no_grad().set_require_grad_group(group, true)
-    } else {
-        model
-    }
 }
 
 fn optimizer(cfg: &TrainConfig) -> ModuleOptimizer {
@@ -139,10 +100,10 @@ pub fn train<T: TrainTask>(
             model: run.model_text()?,
             step: 0,
             cursor: Cursor::default(),
-            schedule: ScheduleState::default(),
+            stage: T::Stage::default(),
             lr: LrState::default(),
             non_finite_in_a_row: 0,
-            validation_mm: None,
+            validation: Metrics::new(),
         };
         (
             model,
@@ -151,8 +112,8 @@ pub fn train<T: TrainTask>(
             MetricsLog::create(&metrics_path)?,
         )
     };
-    model = apply_phase(task, model, state.schedule.phase);
-    task.on_phase(state.schedule.phase);
+    model = task.enter_stage(model, &state.stage);
+    let primary = task.primary_metric();
 
     let mut lr_schedule = LrSchedule::new(
         &cfg.lr_schedule,
@@ -179,20 +140,20 @@ pub fn train<T: TrainTask>(
     );
     bar.set_position(state.step as u64);
 
-    // The error before any training (for Multilevel: close to LBS with the transferred
-    // weights, which the untrained model starts from), logged as step 0.
+    // The metrics before any training (for Multilevel: close to LBS with the
+    // transferred weights, which the untrained model starts from), logged as step 0.
     if !options.resume && cfg.validate_every > 0 {
-        let v = task.validate(&model.valid())?;
-        state.validation_mm = Some(v);
-        lr_schedule.observe_validation(v);
+        let v = validate(task, &model)?;
+        lr_schedule.observe_validation(primary_value(&v, primary));
         state.lr = lr_schedule.state().clone();
         log.push(Record {
-            phase: state.schedule.phase.name().into(),
+            stage: task.stage_name(&state.stage),
             lr: cfg.learning_rate,
-            validation_mm: Some(v),
+            validation: v.clone(),
             event: Some("start".into()),
             ..Record::default()
         })?;
+        state.validation = v;
     }
 
     let mut good: (T::Model, ModuleOptimizer) = (model.clone(), optim.clone());
@@ -204,12 +165,11 @@ pub fn train<T: TrainTask>(
     while state.step < end {
         let started = Instant::now();
         let lr = lr_schedule.next_rate();
-        let phase = state.schedule.phase;
-        let weighted = phase.weighted_terms(&cfg.weights, &cfg.schedule);
-        let terms: Vec<Term> = weighted.iter().map(|&(t, _)| t).collect();
+        let weighted = task.terms(&state.stage);
+        let terms: Vec<T::Term> = weighted.iter().map(|&(t, _)| t).collect();
         let mut sums: Vec<f64> = vec![0.0; terms.len()];
         let mut total_loss: Option<Tensor<1>> = None;
-        let mut bad_term: Option<Term> = None;
+        let mut bad_term: Option<T::Term> = None;
         let mut epoch_ended = false;
         for _ in 0..cfg.batch {
             let (item, last) = sampler.next_item();
@@ -234,11 +194,12 @@ pub fn train<T: TrainTask>(
         let mut record = Record {
             step: state.step,
             epoch: state.cursor.epoch,
-            phase: phase.name().into(),
+            stage: task.stage_name(&state.stage),
             lr,
             ..Record::default()
         };
 
+        let mut means_of_good_step: Option<Vec<(T::Term, f64)>> = None;
         if let Some(term) = bad_term {
             // Skip: back to the last state whose loss was finite.
             skipped += 1;
@@ -267,51 +228,40 @@ pub fn train<T: TrainTask>(
             record.loss = host_scalar(&loss);
             let grads = GradientsParams::from_grads(loss.backward(), &model);
             model = optim.step(lr, model, grads);
-            if let Some(monitored) = state.schedule.monitored() {
-                if let Some(k) = terms.iter().position(|&t| t == monitored) {
-                    state.schedule.observe(means[k]);
-                }
-            }
             record.terms = terms
                 .iter()
                 .zip(&means)
                 .map(|(t, &v)| (t.name().to_string(), v))
                 .collect::<BTreeMap<_, _>>();
+            means_of_good_step = Some(terms.iter().copied().zip(means).collect());
         }
 
-        // Schedule: rules at epoch ends, caps every step.
-        let switched = if epoch_ended {
-            state.schedule.end_epoch(&cfg.schedule, state.step, total)
-        } else {
-            None
-        }
-        .or_else(|| state.schedule.check_caps(&cfg.schedule, state.step, total));
-        if let Some(next) = switched {
-            model = apply_phase(task, model, next);
+        let end_of_step = StepEnd {
+            step: state.step,
+            total,
+            epoch_ended,
+            terms: means_of_good_step.as_deref(),
+        };
+        if task.advance(&mut state.stage, &end_of_step) {
+            model = task.enter_stage(model, &state.stage);
             good = (model.clone(), optim.clone());
-            task.on_phase(next);
-            record
-                .event
-                .get_or_insert_with(|| format!("phase:{}", next.name()));
-            bar.println(format!(
-                "step {}: schedule enters phase `{}`",
-                state.step,
-                next.name()
-            ));
+            let name = task.stage_name(&state.stage);
+            bar.println(format!("step {}: entering stage `{name}`", state.step));
+            record.event.get_or_insert(format!("stage:{name}"));
         }
 
         let final_step = state.step == end;
         if cfg.validate_every > 0 && (state.step % cfg.validate_every == 0 || state.step == total) {
-            let v = task.validate(&model.valid())?;
-            state.validation_mm = Some(v);
-            record.validation_mm = Some(v);
-            if let Some(rate) = lr_schedule.observe_validation(v) {
+            let v = validate(task, &model)?;
+            if let Some(rate) = lr_schedule.observe_validation(primary_value(&v, primary)) {
                 bar.println(format!(
                     "step {}: no better validation for a while; learning rate {rate:.3e}",
                     state.step
                 ));
             }
             state.lr = lr_schedule.state().clone();
+            record.validation = v.clone();
+            state.validation = v;
         }
         let ms = started.elapsed().as_secs_f64() * 1e3;
         if record.event.as_deref() != Some("non_finite") {
@@ -325,8 +275,9 @@ pub fn train<T: TrainTask>(
             "loss {:.4}{}",
             record.loss,
             state
-                .validation_mm
-                .map_or(String::new(), |v| format!(" val {v:.1} mm"))
+                .validation
+                .get(primary)
+                .map_or(String::new(), |v| format!(" {primary} {v:.4}"))
         ));
         if state.step % cfg.checkpoint_every == 0 || final_step {
             last_checkpoint = Some(run.save(&model, &optim, &state)?);
@@ -350,8 +301,8 @@ pub fn train<T: TrainTask>(
         Outcome {
             steps: state.step,
             skipped,
-            phase: state.schedule.phase,
-            validation_mm: state.validation_mm,
+            stage: task.stage_name(&state.stage),
+            validation: state.validation,
             mean_step_ms: if session_steps > 0 {
                 session_ms / session_steps as f64
             } else {
@@ -360,4 +311,22 @@ pub fn train<T: TrainTask>(
             checkpoint,
         },
     ))
+}
+
+/// The task's metrics of `model` in validation mode; the primary one must be there.
+fn validate<T: TrainTask>(task: &mut T, model: &T::Model) -> Result<Metrics> {
+    let v = task.validate(&model.valid())?;
+    let primary = task.primary_metric();
+    if !v.contains_key(primary) {
+        return Err(TrainError::config(
+            "validation",
+            v.keys().cloned().collect::<Vec<_>>().join(", "),
+            &format!("the task's primary metric `{primary}`"),
+        ));
+    }
+    Ok(v)
+}
+
+fn primary_value(metrics: &Metrics, primary: &str) -> f64 {
+    metrics.get(primary).copied().unwrap_or(f64::NAN)
 }

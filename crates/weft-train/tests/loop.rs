@@ -16,9 +16,12 @@ use weft_nn::backend::{cpu_autodiff, seeded};
 use weft_sim::Sphere;
 use weft_train::loss::{
     collision_energies, edge_loss, gravity_energy, membrane_energies, normal_loss, physics_loss,
-    rest_frames, vertex_loss, GarmentTopology, PhysicsImpl, Targets, Term, TermWeights,
+    rest_frames, vertex_loss, GarmentTopology, PhysicsImpl, Targets,
 };
-use weft_train::{train, Phase, RunDir, RunOptions, TrainConfig, TrainError, TrainTask};
+use weft_train::tasks::multilevel::{Phase, ScheduleConfig, ScheduleState, Term, TermWeights};
+use weft_train::{
+    train, Metrics, RunDir, RunOptions, StepEnd, TrainConfig, TrainError, TrainTable, TrainTask,
+};
 
 const FRAMES: usize = 3;
 const ITEMS: usize = 5;
@@ -55,6 +58,8 @@ struct ToyTask {
     topology: GarmentTopology,
     device: Device,
     weights: TermWeights,
+    /// The two-step schedule, Multilevel's, as a staged task.
+    schedule: ScheduleConfig,
     /// Items whose losses are made NaN (to test the guard).
     poisoned: Vec<usize>,
 }
@@ -64,13 +69,14 @@ fn phase_of(item: usize, t: usize) -> f64 {
 }
 
 impl ToyTask {
-    fn new() -> Self {
+    fn new(cfg: &Cfg) -> Self {
         let mesh = grid(3, 3, 0.1);
         ToyTask {
             topology: GarmentTopology::new(&mesh).unwrap(),
             mesh,
             device: cpu_autodiff(),
             weights: TermWeights::default(),
+            schedule: cfg.task.schedule.clone(),
             poisoned: Vec::new(),
         }
     }
@@ -114,9 +120,15 @@ impl ToyTask {
 
 impl TrainTask for ToyTask {
     type Model = Toy;
+    type Term = Term;
+    type Stage = ScheduleState;
 
     fn item_count(&self) -> usize {
         ITEMS
+    }
+
+    fn terms(&self, stage: &ScheduleState) -> Vec<(Term, f64)> {
+        stage.phase.weighted_terms(&self.weights, &self.schedule)
     }
 
     fn losses(
@@ -156,11 +168,18 @@ impl TrainTask for ToyTask {
                         center: [0.1, -0.25, 0.1],
                         radius: 0.26,
                     };
-                    let e = collision_energies(&[body; FRAMES], &host, n, &self.weights)?;
+                    let w = &self.weights;
+                    let e = collision_energies(
+                        &[body; FRAMES],
+                        &host,
+                        n,
+                        w.collision_eps,
+                        w.collision_radius,
+                    )?;
                     physics_loss(x.clone(), &Arc::new(e), PhysicsImpl::Auto)?
                 }
                 Term::Gravity => {
-                    let e = gravity_energy(&self.mesh, FRAMES, &self.weights)?;
+                    let e = gravity_energy(&self.mesh, FRAMES, self.weights.density)?;
                     physics_loss(x.clone(), &Arc::new(e), PhysicsImpl::Auto)?
                 }
                 Term::Stretch | Term::Shear => {
@@ -180,7 +199,7 @@ impl TrainTask for ToyTask {
         Ok(out)
     }
 
-    fn validate(&mut self, model: &Toy) -> weft_train::Result<f64> {
+    fn validate(&mut self, model: &Toy) -> weft_train::Result<Metrics> {
         let device = model.first.weight.val().device();
         let features = self.features(0).to_device(&device);
         let x = model.forward(features, self.rest().to_device(&device));
@@ -192,11 +211,29 @@ impl TrainTask for ToyTask {
             .chunks(3 * self.mesh.vertex_count())
             .map(|f| f.chunks(3).map(|c| [c[0], c[1], c[2]]).collect())
             .collect();
-        weft_train::loss::mean_vertex_error_mm(&pred, &self.truth(0))
+        let mm = weft_train::loss::mean_vertex_error_mm(&pred, &self.truth(0))?;
+        Ok(Metrics::from([("mm".to_string(), mm)]))
     }
 
-    fn physics_group(&self, model: &Toy) -> ParamGroup {
-        ParamGroup::ids_from_module(model.second.clone())
+    fn primary_metric(&self) -> &'static str {
+        "mm"
+    }
+
+    fn stage_name(&self, stage: &ScheduleState) -> String {
+        stage.phase.name().into()
+    }
+
+    fn advance(&self, stage: &mut ScheduleState, end: &StepEnd<'_, Term>) -> bool {
+        stage.advance(&self.schedule, end)
+    }
+
+    fn enter_stage(&mut self, model: Toy, stage: &ScheduleState) -> Toy {
+        if stage.phase.is_frozen() {
+            let group = ParamGroup::ids_from_module(model.second.clone());
+            model.no_grad().set_require_grad_group(group, true)
+        } else {
+            model
+        }
     }
 }
 
@@ -207,19 +244,32 @@ fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
-fn config(steps: usize) -> TrainConfig {
-    let mut cfg = TrainConfig {
-        steps,
-        seed: 5,
-        batch: 2,
-        checkpoint_every: 3,
-        validate_every: 4,
-        learning_rate: 1e-2,
-        ..TrainConfig::default()
+/// The toy's own training settings, in `[train]` beside the loop's.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+struct ToyTraining {
+    schedule: ScheduleConfig,
+}
+
+type Cfg = TrainTable<ToyTraining>;
+
+fn config(steps: usize) -> Cfg {
+    let mut cfg = TrainTable {
+        trainer: TrainConfig {
+            steps,
+            seed: 5,
+            batch: 2,
+            checkpoint_every: 3,
+            validate_every: 4,
+            learning_rate: 1e-2,
+            ..TrainConfig::default()
+        },
+        task: ToyTraining {
+            schedule: ScheduleConfig::cpu(),
+        },
     };
     // Short caps so both phases of step 2 (and the freeze) happen within the run.
-    cfg.schedule.supervised_max_fraction = Some(0.3);
-    cfg.schedule.physics_max_fraction = Some(0.6);
+    cfg.task.schedule.supervised_max_fraction = Some(0.3);
+    cfg.task.schedule.physics_max_fraction = Some(0.6);
     cfg
 }
 
@@ -227,12 +277,12 @@ fn config(steps: usize) -> TrainConfig {
 /// draw from each other's generator, so model construction takes this lock.
 static SEED_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
-fn fresh(cfg: &TrainConfig, toy: &ToyConfig) -> Toy {
+fn fresh(cfg: &Cfg, toy: &ToyConfig) -> Toy {
     let _guard = SEED_LOCK
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let device = seeded(&cpu_autodiff(), cfg.seed);
-    let model = Toy::new(toy, ToyTask::new().mesh.vertex_count(), &device);
+    let device = seeded(&cpu_autodiff(), cfg.trainer.seed);
+    let model = Toy::new(toy, ToyTask::new(cfg).mesh.vertex_count(), &device);
     // Parameters are initialised lazily: materialise them under the lock.
     let _ = params(&model);
     model
@@ -257,7 +307,7 @@ fn params(model: &Toy) -> Vec<u32> {
     .collect()
 }
 
-fn run_in(dir: &Path, cfg: &TrainConfig, toy: &ToyConfig, preset: &str) -> RunDir {
+fn run_in(dir: &Path, cfg: &Cfg, toy: &ToyConfig, preset: &str) -> RunDir {
     RunDir::new(dir, ModelKind::Multilevel, preset, toy, cfg).unwrap()
 }
 
@@ -265,14 +315,14 @@ fn run_in(dir: &Path, cfg: &TrainConfig, toy: &ToyConfig, preset: &str) -> RunDi
 fn a_resumed_run_continues_bit_for_bit() {
     let toy = ToyConfig { hidden: 6 };
     let cfg = config(10);
-    let mut task = ToyTask::new();
+    let mut task = ToyTask::new(&cfg);
 
     let straight_dir = temp_dir("straight");
     let run = run_in(&straight_dir, &cfg, &toy, "toy");
     let (straight, outcome) =
         train(&mut task, fresh(&cfg, &toy), &run, &RunOptions::default()).unwrap();
     assert_eq!(outcome.steps, 10);
-    assert_eq!(outcome.phase, Phase::FullPhysics);
+    assert_eq!(outcome.stage, Phase::FullPhysics.name());
     let straight_log = std::fs::read_to_string(straight_dir.join("metrics.jsonl")).unwrap();
     // Checkpoints at steps 3, 6, 9 and 10; the default keeps the newest 3.
     let mut kept: Vec<String> = std::fs::read_dir(straight_dir.join("checkpoints"))
@@ -292,10 +342,8 @@ fn a_resumed_run_continues_bit_for_bit() {
 
     // Half, stop, resume. Every checkpoint kept: the kill below goes back to step 3.
     let split_dir = temp_dir("split");
-    let keep_all = TrainConfig {
-        keep_checkpoints: 0,
-        ..cfg.clone()
-    };
+    let mut keep_all = cfg.clone();
+    keep_all.trainer.keep_checkpoints = 0;
     let run = run_in(&split_dir, &keep_all, &toy, "toy");
     let half = RunOptions {
         session_steps: Some(5),
@@ -350,7 +398,7 @@ fn a_resumed_run_continues_bit_for_bit() {
 fn checkpoints_of_another_run_are_refused_by_name() {
     let toy = ToyConfig { hidden: 4 };
     let cfg = config(3);
-    let mut task = ToyTask::new();
+    let mut task = ToyTask::new(&cfg);
     let dir = temp_dir("mismatch");
     let run = run_in(&dir, &cfg, &toy, "toy");
     train(&mut task, fresh(&cfg, &toy), &run, &RunOptions::default()).unwrap();
@@ -380,7 +428,7 @@ fn checkpoints_of_another_run_are_refused_by_name() {
     assert!(err.to_string().contains("model.hidden"));
     // Another training configuration.
     let mut longer = cfg.clone();
-    longer.learning_rate = 0.5;
+    longer.trainer.learning_rate = 0.5;
     let other = run_in(&dir, &longer, &toy, "toy");
     let err = train(&mut task, fresh(&longer, &toy), &other, &resume).unwrap_err();
     assert!(
@@ -414,9 +462,9 @@ fn checkpoints_of_another_run_are_refused_by_name() {
 fn non_finite_losses_skip_the_step_and_stop_when_persistent() {
     let toy = ToyConfig { hidden: 4 };
     let mut cfg = config(12);
-    cfg.batch = 1;
-    cfg.schedule.two_step = false;
-    let mut task = ToyTask::new();
+    cfg.trainer.batch = 1;
+    cfg.task.schedule.two_step = false;
+    let mut task = ToyTask::new(&cfg);
     task.poisoned = vec![2];
     let dir = temp_dir("nan");
     let run = run_in(&dir, &cfg, &toy, "toy");
@@ -437,7 +485,7 @@ fn non_finite_losses_skip_the_step_and_stop_when_persistent() {
     assert_eq!(events[0]["term"], "vertex");
 
     // Every item poisoned: stops after max_non_finite steps, naming the term.
-    cfg.max_non_finite = 3;
+    cfg.trainer.max_non_finite = 3;
     task.poisoned = (0..ITEMS).collect();
     let dir2 = temp_dir("nan2");
     let run = run_in(&dir2, &cfg, &toy, "toy");
@@ -462,10 +510,10 @@ fn non_finite_losses_skip_the_step_and_stop_when_persistent() {
 fn step_two_trains_only_the_second_submodule_and_the_loss_falls() {
     let toy = ToyConfig { hidden: 8 };
     let mut cfg = config(40);
-    cfg.checkpoint_every = 40;
-    cfg.schedule.supervised_max_fraction = Some(0.75);
-    cfg.schedule.physics_max_fraction = None;
-    let mut task = ToyTask::new();
+    cfg.trainer.checkpoint_every = 40;
+    cfg.task.schedule.supervised_max_fraction = Some(0.75);
+    cfg.task.schedule.physics_max_fraction = None;
+    let mut task = ToyTask::new(&cfg);
     let dir = temp_dir("freeze");
     let run = run_in(&dir, &cfg, &toy, "toy");
     let first = RunOptions {
@@ -473,7 +521,7 @@ fn step_two_trains_only_the_second_submodule_and_the_loss_falls() {
         ..RunOptions::default()
     };
     let (before, o) = train(&mut task, fresh(&cfg, &toy), &run, &first).unwrap();
-    assert_eq!(o.phase, Phase::Physics);
+    assert_eq!(o.stage, Phase::Physics.name());
     let resume = RunOptions {
         resume: true,
         ..RunOptions::default()

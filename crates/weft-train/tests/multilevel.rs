@@ -12,8 +12,10 @@ use weft_models::multilevel::{Multilevel, MultilevelConfig, Predictor};
 use weft_models::ModelKind;
 use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_nn::backend::{cpu_autodiff, seeded};
-use weft_train::multilevel::carried_sequence;
-use weft_train::{train, MultilevelTask, Phase, RunDir, RunOptions, TrainConfig};
+use weft_train::tasks::multilevel::{carried_sequence, Phase, E_VERTS_MM};
+use weft_train::{
+    train, MultilevelTask, MultilevelTraining, RunDir, RunOptions, TrainConfig, TrainTable,
+};
 
 const FRAMES: usize = 8;
 
@@ -38,26 +40,31 @@ fn sequence(id: &str, seed: u64) -> (weft_body::BodyModel, weft_data::Sequence) 
     (body, seq)
 }
 
-fn config() -> TrainConfig {
-    let mut cfg = TrainConfig {
-        steps: 6,
-        window: 4,
-        checkpoint_every: 3,
-        validate_every: 3,
-        learning_rate: 1e-3,
-        ..TrainConfig::default()
+fn config() -> TrainTable<MultilevelTraining> {
+    let mut cfg = TrainTable {
+        trainer: TrainConfig {
+            steps: 6,
+            checkpoint_every: 3,
+            validate_every: 3,
+            learning_rate: 1e-3,
+            ..TrainConfig::default()
+        },
+        task: MultilevelTraining {
+            window: 4,
+            ..MultilevelTraining::default()
+        },
     };
-    cfg.schedule.supervised_max_fraction = Some(0.3);
-    cfg.schedule.physics_max_fraction = Some(0.6);
+    cfg.task.schedule.supervised_max_fraction = Some(0.3);
+    cfg.task.schedule.physics_max_fraction = Some(0.6);
     cfg
 }
 
-fn task(model_cfg: &MultilevelConfig, cfg: &TrainConfig) -> MultilevelTask {
+fn task(model_cfg: &MultilevelConfig, cfg: &TrainTable<MultilevelTraining>) -> MultilevelTask {
     let (body, train) = sequence("train", 1);
     let (_, validation) = sequence("validation", 2);
     MultilevelTask::new(
         model_cfg,
-        cfg,
+        &cfg.task,
         body,
         vec![train],
         vec![validation],
@@ -116,15 +123,15 @@ fn multilevel_trains_through_every_phase_and_resumes_bit_for_bit() {
     .unwrap();
     let (straight, outcome) = train(
         &mut t,
-        fresh(&model_cfg, cfg.seed),
+        fresh(&model_cfg, cfg.trainer.seed),
         &run,
         &RunOptions::default(),
     )
     .unwrap();
     assert_eq!(outcome.steps, 6);
     assert_eq!(outcome.skipped, 0);
-    assert_eq!(outcome.phase, Phase::FullPhysics);
-    let v = outcome.validation_mm.unwrap();
+    assert_eq!(outcome.stage, Phase::FullPhysics.name());
+    let v = outcome.validation[E_VERTS_MM];
     assert!(v.is_finite() && v > 0.0, "{v}");
     let log = std::fs::read_to_string(straight_dir.join("metrics.jsonl")).unwrap();
     for term in [
@@ -145,13 +152,13 @@ fn multilevel_trains_through_every_phase_and_resumes_bit_for_bit() {
         session_steps: Some(3),
         ..RunOptions::default()
     };
-    train(&mut t, fresh(&model_cfg, cfg.seed), &run, &half).unwrap();
+    train(&mut t, fresh(&model_cfg, cfg.trainer.seed), &run, &half).unwrap();
     let mut t = task(&model_cfg, &cfg);
     let resume = RunOptions {
         resume: true,
         ..RunOptions::default()
     };
-    let (resumed, _) = train(&mut t, fresh(&model_cfg, cfg.seed), &run, &resume).unwrap();
+    let (resumed, _) = train(&mut t, fresh(&model_cfg, cfg.trainer.seed), &run, &resume).unwrap();
     assert_eq!(
         bits(&resumed),
         bits(&straight),

@@ -56,16 +56,14 @@ pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
     };
     let started = Instant::now();
     let outcome = train_run(&spec, &mut |line| eprintln!("{line}"))?;
-    let validation = outcome
-        .validation_mm
-        .map_or("not measured".to_string(), |v| format!("{v:.2} mm"));
+    let validation = weft_train::metrics::describe(&outcome.validation);
     super::emit(&format!(
-        "trained {} steps in {:.1} s ({:.1} ms/step, {} skipped), phase {}\nvalidation mean vertex error: {validation}\ncheckpoint: {}\nmetrics: {}\ncurves: {}",
+        "trained {} steps in {:.1} s ({:.1} ms/step, {} skipped), stage {}\nvalidation: {validation}\ncheckpoint: {}\nmetrics: {}\ncurves: {}",
         outcome.steps,
         started.elapsed().as_secs_f64(),
         outcome.mean_step_ms,
         outcome.skipped,
-        outcome.phase.name(),
+        outcome.stage,
         outcome.checkpoint.display(),
         a.out.join("metrics.jsonl").display(),
         a.out.join("curves.png").display(),

@@ -11,7 +11,7 @@
 //!
 //! The ground-truth side (edge lengths, normals) is computed once per window on the
 //! host in f64 ([`Targets`]); only the prediction side is differentiated. The weights
-//! `k_v, k_e, k_n` are applied by the caller ([`crate::loss::TermWeights`]).
+//! `k_v, k_e, k_n` are applied by the caller ([`crate::tasks::multilevel::TermWeights`]).
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};

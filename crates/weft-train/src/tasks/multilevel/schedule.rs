@@ -16,8 +16,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::terms::{Term, TermWeights};
 use crate::error::{Result, TrainError};
-use crate::loss::{Term, TermWeights};
+use crate::task::StepEnd;
 
 /// Where the schedule is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
@@ -232,6 +233,22 @@ impl ScheduleState {
         self.epoch_sum = 0.0;
         self.epoch_count = 0;
         self.check_switch(cfg, step, total, true)
+    }
+
+    /// Moves the schedule after a training step: records the monitored term of a step
+    /// that was not skipped, applies the rules at epoch ends and the caps every step.
+    /// Returns whether the phase changed.
+    pub fn advance(&mut self, cfg: &ScheduleConfig, end: &StepEnd<'_, Term>) -> bool {
+        if let Some(v) = self.monitored().and_then(|t| end.term(t)) {
+            self.observe(v);
+        }
+        let switched = if end.epoch_ended {
+            self.end_epoch(cfg, end.step, end.total)
+        } else {
+            None
+        }
+        .or_else(|| self.check_caps(cfg, end.step, end.total));
+        switched.is_some()
     }
 
     /// Checks only the caps (called every step).

@@ -1,6 +1,8 @@
 //! Training the Multilevel model (seed 000) on a weft-data dataset: the [`TrainTask`] that
 //! turns sequences into windows of frames, evaluates the loss terms of supplement §2 on
-//! the model's predictions, and measures the validation error.
+//! the model's predictions ([`terms`]), moves through the two-step schedule
+//! ([`schedule`]) and measures the validation error. [`config`] holds the run's
+//! configuration.
 //!
 //! - Items are windows of `window` consecutive frames of a training sequence (starts
 //!   `0, w, 2w, …`, plus one window ending at the last frame when they do not reach it;
@@ -14,170 +16,43 @@
 //!   frozen (step 2), as inference caches it.
 //! - Collision contacts come from the posed body of each frame (weft-sim's `PosedBody`,
 //!   the simulator's own body query), at the current prediction.
-//! - Validation: mean vertex error (mm) over at most `validation_windows` windows spread
-//!   evenly over the validation sequences.
+//! - Validation: mean vertex error (`e_verts_mm`) over at most `validation_windows`
+//!   windows spread evenly over the validation sequences.
+
+pub mod config;
+pub mod schedule;
+pub mod terms;
 
 use std::collections::HashMap;
 use std::ops::Range;
 use std::path::Path;
 use std::sync::Arc;
 
-use burn::module::ParamGroup;
+use burn::module::{Module, ParamGroup};
 use burn::tensor::{Device, Tensor};
 use weft_body::{BodyModel, Pose, PosedSequence};
 use weft_data::{Dataset, Sequence, Split};
 use weft_models::multilevel::{
     FrameInputs, GarmentInput, Multilevel, MultilevelConfig, PairEncoding,
 };
-use weft_models::run::RunHeader;
 use weft_models::Clip;
-use weft_models::ModelKind;
 use weft_sim::{PosedBody, RestFrames};
 
-use crate::config::TrainConfig;
+pub use config::{MultilevelRun, MultilevelTraining};
+pub use schedule::{Phase, ScheduleConfig, ScheduleState};
+pub use terms::{Term, TermWeights};
+
 use crate::error::{Result, TrainError};
 use crate::loss::{
     collision_energies, edge_loss, gravity_energy, mean_vertex_error_mm, membrane_energies,
     normal_loss, physics_loss, rest_frames, vertex_loss, FrameEnergies, GarmentTopology,
-    PhysicsImpl, Targets, Term, TermWeights,
+    PhysicsImpl, Targets,
 };
-use crate::run::RunDir;
-use crate::schedule::Phase;
-use crate::trainer::TrainTask;
+use crate::task::{Metrics, StepEnd, TrainTask};
 
-/// The configuration of a Multilevel run: preset name, model and training tables.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MultilevelRun {
-    /// The preset the run started from (`cpu` or `paper`).
-    pub preset: String,
-    /// The model (`[model]`).
-    pub model: MultilevelConfig,
-    /// The training (`[train]`).
-    pub train: TrainConfig,
-}
-
-impl MultilevelRun {
-    /// The preset `name` (model and training sides).
-    pub fn preset(name: &str) -> Result<Self> {
-        Ok(MultilevelRun {
-            preset: name.to_string(),
-            model: MultilevelConfig::preset(name)?,
-            train: TrainConfig::preset(name)?,
-        })
-    }
-
-    /// A preset with a config file's `[model]` and `[train]` fields laid over it. The
-    /// preset is `preset`, else the file's `preset`, else `cpu`. Unknown fields and
-    /// values out of range are errors naming the file and the field.
-    pub fn resolve(preset: Option<&str>, file: Option<&Path>) -> Result<Self> {
-        let table: Option<toml::Table> = match file {
-            Some(path) => {
-                let text = std::fs::read_to_string(path).map_err(|e| TrainError::io(path, e))?;
-                Some(toml::from_str(&text).map_err(|source| TrainError::Toml {
-                    path: path.to_path_buf(),
-                    source,
-                })?)
-            }
-            None => None,
-        };
-        let name = preset
-            .map(str::to_string)
-            .or_else(|| {
-                table
-                    .as_ref()
-                    .and_then(|t| t.get("preset"))
-                    .and_then(toml::Value::as_str)
-                    .map(str::to_string)
-            })
-            .unwrap_or_else(|| "cpu".to_string());
-        let mut run = Self::preset(&name)?;
-        let Some(table) = table else {
-            return Ok(run);
-        };
-        let path = file.unwrap_or(Path::new("config"));
-        let origin = path.display().to_string();
-        weft_config::check_keys(
-            &table,
-            &["format_version", "model_kind", "preset", "model", "train"],
-            &origin,
-        )?;
-        if let Some(v) = table.get("model_kind") {
-            if v.as_str() != Some(ModelKind::Multilevel.name()) {
-                return Err(TrainError::Mismatch {
-                    path: path.to_path_buf(),
-                    field: "model_kind".into(),
-                    found: v.to_string(),
-                    expected: ModelKind::Multilevel.name().into(),
-                });
-            }
-        }
-        if let Some(v) = table.get("format_version") {
-            if v.as_integer() != Some(crate::run::FORMAT_VERSION) {
-                return Err(TrainError::Mismatch {
-                    path: path.to_path_buf(),
-                    field: "format_version".into(),
-                    found: v.to_string(),
-                    expected: crate::run::FORMAT_VERSION.to_string(),
-                });
-            }
-        }
-        let section = |name: &str| match table.get(name) {
-            None => Ok(None),
-            Some(toml::Value::Table(t)) => Ok(Some(t)),
-            Some(other) => Err(TrainError::Parse {
-                path: path.to_path_buf(),
-                message: format!(
-                    "`{name}` must be a table ([{name}]), found {}",
-                    other.type_str()
-                ),
-            }),
-        };
-        if let Some(m) = section("model")? {
-            run.model = weft_config::overlay(&run.model, m, &origin, "model")?;
-            run.model.validate().map_err(|e| TrainError::Parse {
-                path: path.to_path_buf(),
-                message: format!("[model]: {e}"),
-            })?;
-        }
-        if let Some(t) = section("train")? {
-            run.train = weft_config::overlay(&run.train, t, &origin, "train")?;
-        }
-        run.train.validate()?;
-        Ok(run)
-    }
-
-    /// The configuration of the run in `dir` (its config.toml).
-    pub fn from_run_dir(dir: &Path) -> Result<Self> {
-        let path = dir.join("config.toml");
-        if !path.exists() {
-            return Err(TrainError::RunDir {
-                path: dir.to_path_buf(),
-                message: "no config.toml: not a training run directory".into(),
-            });
-        }
-        Self::resolve(None, Some(&path))
-    }
-
-    /// The run directory `dir` for this configuration.
-    pub fn run_dir(&self, dir: &Path) -> Result<RunDir> {
-        RunDir::new(
-            dir,
-            ModelKind::Multilevel,
-            &self.preset,
-            &self.model,
-            &self.train,
-        )
-    }
-
-    /// The full configuration as config.toml text (every default written out).
-    pub fn to_toml(&self) -> Result<String> {
-        crate::run::config_text(
-            &RunHeader::new(ModelKind::Multilevel, &self.preset),
-            &crate::run::to_table("model config", &self.model)?,
-            &self.train,
-        )
-    }
-}
+/// The name of Multilevel's validation metric: mean vertex error on the validation
+/// windows, mm.
+pub const E_VERTS_MM: &str = "e_verts_mm";
 
 /// One garment–body–motion sequence with everything constant precomputed.
 struct Pair {
@@ -212,7 +87,7 @@ struct WindowData {
 /// The Multilevel model's training task; see the module documentation.
 pub struct MultilevelTask {
     cfg: MultilevelConfig,
-    weights: TermWeights,
+    training: MultilevelTraining,
     body: BodyModel,
     device: Device,
     train: Vec<Pair>,
@@ -301,7 +176,7 @@ impl MultilevelTask {
     /// The task over in-memory sequences (`train` must not be empty).
     pub fn new(
         cfg: &MultilevelConfig,
-        train_cfg: &TrainConfig,
+        training: &MultilevelTraining,
         body: BodyModel,
         train: Vec<Sequence>,
         validation: Vec<Sequence>,
@@ -312,15 +187,19 @@ impl MultilevelTask {
         };
         let train = build(train)?;
         let validation = build(validation)?;
-        let items: Vec<(usize, Range<usize>)> = train
-            .iter()
-            .enumerate()
-            .flat_map(|(p, pair)| {
-                windows(pair.seq.positions.len(), train_cfg.window)
-                    .into_iter()
-                    .map(move |r| (p, r))
-            })
-            .collect();
+        // Every window of every pair, as (pair, frames).
+        let windows_of = |pairs: &[Pair]| -> Vec<(usize, Range<usize>)> {
+            pairs
+                .iter()
+                .enumerate()
+                .flat_map(|(p, pair)| {
+                    windows(pair.seq.positions.len(), training.window)
+                        .into_iter()
+                        .map(move |r| (p, r))
+                })
+                .collect()
+        };
+        let items = windows_of(&train);
         if items.is_empty() {
             return Err(TrainError::config(
                 "data",
@@ -328,16 +207,8 @@ impl MultilevelTask {
                 "at least one training sequence with frames",
             ));
         }
-        let all_val: Vec<(usize, Range<usize>)> = validation
-            .iter()
-            .enumerate()
-            .flat_map(|(p, pair)| {
-                windows(pair.seq.positions.len(), train_cfg.window)
-                    .into_iter()
-                    .map(move |r| (p, r))
-            })
-            .collect();
-        let cap = train_cfg.validation_windows.max(1);
+        let all_val = windows_of(&validation);
+        let cap = training.validation_windows.max(1);
         let validation_items = if all_val.len() <= cap {
             all_val
         } else {
@@ -347,7 +218,7 @@ impl MultilevelTask {
         };
         Ok(MultilevelTask {
             cfg: cfg.clone(),
-            weights: train_cfg.weights.clone(),
+            training: training.clone(),
             body,
             device: device.clone(),
             train,
@@ -364,7 +235,7 @@ impl MultilevelTask {
     pub fn from_dataset(
         dir: &Path,
         cfg: &MultilevelConfig,
-        train_cfg: &TrainConfig,
+        training: &MultilevelTraining,
         device: &Device,
     ) -> Result<Self> {
         let dataset = Dataset::open(dir)?;
@@ -384,7 +255,7 @@ impl MultilevelTask {
         }
         let validation = load(Split::Validation)?;
         let body = dataset.body_model()?;
-        Self::new(cfg, train_cfg, body, train, validation, device)
+        Self::new(cfg, training, body, train, validation, device)
     }
 
     /// Validation windows measured per validation.
@@ -493,9 +364,17 @@ fn host_positions(x: &Tensor<3>) -> Result<Vec<[f64; 3]>> {
 
 impl TrainTask for MultilevelTask {
     type Model = Multilevel;
+    type Term = Term;
+    type Stage = ScheduleState;
 
     fn item_count(&self) -> usize {
         self.items.len()
+    }
+
+    fn terms(&self, stage: &ScheduleState) -> Vec<(Term, f64)> {
+        stage
+            .phase
+            .weighted_terms(&self.training.weights, &self.training.schedule)
     }
 
     fn losses(
@@ -535,11 +414,16 @@ impl TrainTask for MultilevelTask {
                 (Term::Collision, _) => {
                     let bodies = pair.posed_bodies(range.clone(), &self.body)?;
                     let host = host_positions(&x)?;
-                    physics(collision_energies(&bodies, &host, n, &self.weights)?)?
+                    let w = &self.training.weights;
+                    let e =
+                        collision_energies(&bodies, &host, n, w.collision_eps, w.collision_radius)?;
+                    physics(e)?
                 }
-                (Term::Gravity, _) => {
-                    physics(gravity_energy(&pair.seq.garment, t, &self.weights)?)?
-                }
+                (Term::Gravity, _) => physics(gravity_energy(
+                    &pair.seq.garment,
+                    t,
+                    self.training.weights.density,
+                )?)?,
                 (Term::Stretch, _) => physics(membrane_energies(&pair.frames, t)?.0)?,
                 (Term::Shear, _) => physics(membrane_energies(&pair.frames, t)?.1)?,
             };
@@ -548,7 +432,48 @@ impl TrainTask for MultilevelTask {
         Ok(out)
     }
 
-    fn validate(&mut self, model: &Multilevel) -> Result<f64> {
+    fn validate(&mut self, model: &Multilevel) -> Result<Metrics> {
+        let mm = self.vertex_error_mm(model)?;
+        Ok(Metrics::from([(E_VERTS_MM.to_string(), mm)]))
+    }
+
+    fn primary_metric(&self) -> &'static str {
+        E_VERTS_MM
+    }
+
+    fn stage_name(&self, stage: &ScheduleState) -> String {
+        stage.phase.name().to_string()
+    }
+
+    fn advance(&self, stage: &mut ScheduleState, end: &StepEnd<'_, Term>) -> bool {
+        stage.advance(&self.training.schedule, end)
+    }
+
+    fn enter_stage(&mut self, model: Multilevel, stage: &ScheduleState) -> Multilevel {
+        // Step 2 trains the second (last) M^mp submodule only; the pair encoding is then
+        // constant and cached.
+        let frozen = stage.phase.is_frozen();
+        self.cache_encodings = frozen;
+        self.encodings.clear();
+        if !frozen {
+            return model;
+        }
+        let group = Self::physics_group(&model);
+        model.no_grad().set_require_grad_group(group, true)
+    }
+}
+
+impl MultilevelTask {
+    /// The parameters step 2 trains: the second (last) M^mp submodule.
+    pub fn physics_group(model: &Multilevel) -> ParamGroup {
+        match model.mp.last() {
+            Some(sub) => ParamGroup::ids_from_module(sub.clone()),
+            None => ParamGroup::from_ids(Vec::new()),
+        }
+    }
+
+    /// Mean vertex error over the validation windows, mm (NaN without any).
+    fn vertex_error_mm(&mut self, model: &Multilevel) -> Result<f64> {
         if self.validation_items.is_empty() {
             return Ok(f64::NAN);
         }
@@ -579,79 +504,11 @@ impl TrainTask for MultilevelTask {
         }
         Ok(sum / count.max(1) as f64)
     }
-
-    fn physics_group(&self, model: &Multilevel) -> ParamGroup {
-        // Step 2 trains the second (last) M^mp submodule only.
-        match model.mp.last() {
-            Some(sub) => ParamGroup::ids_from_module(sub.clone()),
-            None => ParamGroup::from_ids(Vec::new()),
-        }
-    }
-
-    fn on_phase(&mut self, phase: Phase) {
-        self.cache_encodings = phase.is_frozen();
-        self.encodings.clear();
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn run_configs_resolve_from_presets_and_files() {
-        let cpu = MultilevelRun::resolve(None, None).unwrap();
-        assert_eq!(cpu, MultilevelRun::preset("cpu").unwrap());
-        // What `weft config show` prints reads back to the same configuration.
-        let dir = std::env::temp_dir().join(format!("weft-train-cfg-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("paper.toml");
-        let paper = MultilevelRun::preset("paper").unwrap();
-        std::fs::write(&path, paper.to_toml().unwrap()).unwrap();
-        assert_eq!(MultilevelRun::resolve(None, Some(&path)).unwrap(), paper);
-        // A partial file over a preset.
-        std::fs::write(&path, "[train]\nsteps = 9\n[model]\nmp_channels = 4\n").unwrap();
-        let r = MultilevelRun::resolve(Some("cpu"), Some(&path)).unwrap();
-        assert_eq!((r.train.steps, r.model.mp_channels), (9, 4));
-        assert_eq!(r.model.gg_widths, MultilevelConfig::cpu().gg_widths);
-        // Unknown or out-of-range fields are named.
-        std::fs::write(&path, "[train]\nstepz = 9\n").unwrap();
-        let e = MultilevelRun::resolve(None, Some(&path))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("stepz"), "{e}");
-        // The typo the platform issue found silently dropped: refused, dotted and with
-        // the file, though MultilevelConfig (burn's Config derive) does not deny unknown
-        // fields itself.
-        std::fs::write(&path, "[model]\nmp_chanels = 4\n").unwrap();
-        let e = MultilevelRun::resolve(None, Some(&path))
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("model.mp_chanels") && e.contains("paper.toml"),
-            "{e}"
-        );
-        // Switching the optimiser replaces its table: Adamax's fields do not leak in.
-        std::fs::write(&path, "[train.optimizer]\nkind = \"adam\"\n").unwrap();
-        let r = MultilevelRun::resolve(None, Some(&path)).unwrap();
-        assert!(
-            matches!(r.train.optimizer, crate::optim::OptimizerConfig::Adam(_)),
-            "{:?}",
-            r.train.optimizer
-        );
-        std::fs::write(&path, "[train]\nwindow = 0\n").unwrap();
-        let e = MultilevelRun::resolve(None, Some(&path))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("train.window"), "{e}");
-        std::fs::write(&path, "format_version = 7\n").unwrap();
-        let e = MultilevelRun::resolve(None, Some(&path))
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("format_version"), "{e}");
-        assert!(MultilevelRun::resolve(Some("huge"), None).is_err());
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
 
     #[test]
     fn windows_tile_the_sequence() {

@@ -1,0 +1,6 @@
+//! The training task of each system, one module per model: its items, loss terms and
+//! weights, stages and validation metrics, and its run configuration. A new system adds
+//! a module here implementing [`crate::TrainTask`]; the loop, optimisers, checkpoints and
+//! metrics log are shared.
+
+pub mod multilevel;
