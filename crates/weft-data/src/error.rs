@@ -20,6 +20,9 @@ pub enum DataError {
         #[source]
         source: std::io::Error,
     },
+    /// The dataset directory is held by another process.
+    #[error(transparent)]
+    Lock(#[from] weft_mesh::io::lock::LockError),
     /// A config file does not parse as TOML of the expected layout.
     #[error("{}: {message}", .path.display())]
     ConfigSyntax {

@@ -25,6 +25,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use weft_body::BodyModel;
 use weft_garment::{FitBody, Garment, GarmentKind, Style};
+use weft_mesh::io::lock::{remove_stale_temps, Access, DirLock, LOCK_FILE};
 use weft_motion::{
     generate as procedural_motion, read_motion, resample, Motion, MotionFileOptions, MotionKind,
     ProceduralParams,
@@ -194,6 +195,28 @@ pub struct GenerateReport {
     pub seconds: f64,
 }
 
+/// Takes `out` for this process until the returned locks drop: a whole run holds it
+/// alone (and removes the temporary files an interrupted run left); a `--shard i/n` job
+/// shares it with the other jobs and holds its own part alone.
+fn lock_output(out: &Path, job: Option<Job>) -> Result<Vec<DirLock>, DataError> {
+    const HOLDER: &str = "weft data generate";
+    match job {
+        None => {
+            let lock = DirLock::acquire(out, LOCK_FILE, Access::Exclusive, HOLDER)?;
+            remove_stale_temps(out, 1)
+                .map_err(|e| DataError::io(out, "cannot remove stale temporary files", e))?;
+            Ok(vec![lock])
+        }
+        Some(j) => {
+            let shared = DirLock::acquire(out, LOCK_FILE, Access::Shared, HOLDER)?;
+            let own = format!(".{}.lock", j.manifest_file());
+            let holder = format!("{HOLDER} --shard {}/{}", j.index, j.count);
+            let part = DirLock::acquire(out, &own, Access::Exclusive, &holder)?;
+            Ok(vec![shared, part])
+        }
+    }
+}
+
 /// Generates (or resumes) the dataset of `config` in `out`.
 pub fn generate(
     config: &DataConfig,
@@ -210,6 +233,7 @@ pub fn generate(
         })?;
     let mut manifest = plan(config, model.num_betas(), model.source())?;
     manifest.job = options.job;
+    let _locks = lock_output(out, options.job)?;
     for sub in ["", "garments", "shards", "stats"] {
         let d = out.join(sub);
         std::fs::create_dir_all(&d)

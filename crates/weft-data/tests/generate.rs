@@ -229,6 +229,43 @@ fn a_directory_of_another_config_is_refused() {
 }
 
 #[test]
+fn a_second_writer_is_refused_and_jobs_share_the_directory() {
+    use weft_mesh::io::lock::{Access, DirLock, LOCK_FILE};
+    let c = small_config();
+    let dir = scratch("locked");
+    let generate_as =
+        |job: Option<Job>| generate(&c, &dir, &GenerateOptions { job }, &FakeSim::new(), &Silent);
+    // A whole run in progress: nothing else may write.
+    let held = DirLock::acquire(&dir, LOCK_FILE, Access::Exclusive, "weft data generate").unwrap();
+    for job in [None, Some(Job { index: 0, count: 2 })] {
+        let err = generate_as(job).unwrap_err();
+        assert!(matches!(err, DataError::Lock(_)), "{err}");
+        assert!(err.to_string().contains("weft data generate, pid"), "{err}");
+    }
+    assert!(!dir.join("manifest.json").exists());
+    drop(held);
+    // Job 0 in progress: job 1 runs beside it; a whole run and a second job 0 are refused.
+    let shared = DirLock::acquire(&dir, LOCK_FILE, Access::Shared, "job 0").unwrap();
+    let own = DirLock::acquire(
+        &dir,
+        ".manifest.part-0-of-2.json.lock",
+        Access::Exclusive,
+        "weft data generate --shard 0/2",
+    )
+    .unwrap();
+    generate_as(Some(Job { index: 1, count: 2 })).unwrap();
+    assert!(matches!(generate_as(None), Err(DataError::Lock(_))));
+    let err = generate_as(Some(Job { index: 0, count: 2 })).unwrap_err();
+    assert!(err.to_string().contains("--shard 0/2"), "{err}");
+    drop((shared, own));
+    // A whole run removes the temporary files a killed run left.
+    let stale = dir.join("shards/.train-x.safetensors.999999.3.tmp");
+    std::fs::write(&stale, [0u8; 32]).unwrap();
+    generate_as(None).unwrap();
+    assert!(!stale.exists());
+}
+
+#[test]
 fn shard_jobs_merge_into_the_single_job_manifest() {
     let c = small_config();
     let single = scratch("jobs-single");

@@ -149,6 +149,9 @@ pub enum TrainError {
     /// The dataset could not be read.
     #[error(transparent)]
     Data(#[from] weft_data::DataError),
+    /// The run directory is held by another process.
+    #[error(transparent)]
+    Lock(#[from] weft_mesh::io::lock::LockError),
     /// A tensor could not be read back to the host.
     #[error("reading {what} back from the device")]
     Tensor {

@@ -25,6 +25,7 @@ use burn::optim::ModuleOptimizer;
 use burn::store::ModuleRecord;
 use burn::tensor::Bytes;
 use serde::{de::DeserializeOwned, Deserialize, Serialize};
+use weft_mesh::io::lock::{remove_stale_temps, Access, DirLock, LOCK_FILE};
 use weft_mesh::io::write_atomic;
 pub use weft_models::run::FORMAT_VERSION;
 use weft_models::run::{RunHeader, RunLayout};
@@ -168,8 +169,17 @@ impl RunDir {
         config_text(&self.header, &self.model_toml, &self.train_toml)
     }
 
-    /// Starts a fresh run: refuses a directory that already holds a checkpoint (resume it
-    /// or choose another), writes config.toml.
+    /// Takes the run directory for this process (created if missing): a second `weft
+    /// train` into it is refused naming this one, until this one ends however it ends.
+    /// Temporary files that an interrupted write left are removed.
+    pub fn lock(&self) -> Result<DirLock> {
+        let lock = DirLock::acquire(self.root(), LOCK_FILE, Access::Exclusive, "weft train")?;
+        remove_stale_temps(self.root(), 1).map_err(|e| TrainError::io(self.root(), e))?;
+        Ok(lock)
+    }
+
+    /// Starts a fresh run: refuses a directory that already holds a checkpoint, with or
+    /// without `latest` (resume it or choose another), writes config.toml.
     pub fn start(&self) -> Result<()> {
         if self.layout.latest().exists() {
             return Err(TrainError::RunDir {
@@ -180,6 +190,18 @@ impl RunDir {
             });
         }
         let dir = self.checkpoints();
+        if dir.is_dir() {
+            if let Some(&step) = self.layout.checkpoint_steps()?.last() {
+                return Err(TrainError::RunDir {
+                    path: self.root().to_path_buf(),
+                    message: format!(
+                        "holds checkpoints up to step {step} but no checkpoints/latest (an \
+                         interrupted run); pass --resume to continue from the newest complete \
+                         one, or choose another --out directory; nothing was overwritten"
+                    ),
+                });
+            }
+        }
         std::fs::create_dir_all(&dir).map_err(|e| TrainError::io(dir, e))?;
         let text = self.config_text()?;
         write_file(&self.config_path(), text.as_bytes())
@@ -314,6 +336,28 @@ impl RunDir {
         Ok(self.layout.latest_stem()?)
     }
 
+    /// The checkpoint a resume starts from: `latest`'s, or when `latest` is missing (a run
+    /// interrupted before its first pointer, or the file lost) the newest checkpoint whose
+    /// three files are all there.
+    pub fn resume_point(&self) -> Result<Option<String>> {
+        if let Some(stem) = self.latest()? {
+            return Ok(Some(stem));
+        }
+        if !self.checkpoints().is_dir() {
+            return Ok(None);
+        }
+        let steps = self.layout.checkpoint_steps()?;
+        Ok(steps.iter().rev().map(|&s| Self::stem(s)).find(|stem| {
+            [
+                self.layout.model_record(stem),
+                self.layout.optimizer_record(stem),
+                self.layout.state(stem),
+            ]
+            .iter()
+            .all(|p| p.is_file())
+        }))
+    }
+
     /// Loads the latest checkpoint into `fresh` (a model of this run's configuration) and
     /// `optim` (a fresh optimiser); checks the state's version, preset and model table.
     pub fn load<M: Module, S: DeserializeOwned>(
@@ -321,11 +365,11 @@ impl RunDir {
         fresh: M,
         optim: ModuleOptimizer,
     ) -> Result<(M, ModuleOptimizer, TrainerState<S>)> {
-        let stem = self.latest()?.ok_or_else(|| TrainError::RunDir {
+        let stem = self.resume_point()?.ok_or_else(|| TrainError::RunDir {
             path: self.root().to_path_buf(),
-            message:
-                "no checkpoint to resume (checkpoints/latest is missing); start without --resume"
-                    .into(),
+            message: "no checkpoint to resume (no checkpoints/latest and no complete \
+                      checkpoint); start without --resume"
+                .into(),
         })?;
         let state_path = self.layout.state(&stem);
         let state: TrainerState<S> = read_json(&state_path)?;

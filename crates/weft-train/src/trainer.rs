@@ -87,8 +87,19 @@ pub fn train<T: TrainTask>(
         ));
     }
     let metrics_path = run.root().join("metrics.jsonl");
+    // Held until the run returns: no second writer, whatever happens to this one.
+    let _lock = run.lock()?;
     let (mut model, mut optim, mut state, mut log) = if options.resume {
         run.check_existing()?;
+        if run.latest()?.is_none() {
+            if let Some(stem) = run.resume_point()? {
+                eprintln!(
+                    "{}: checkpoints/latest is missing; resuming from {stem}, the newest \
+                     complete checkpoint",
+                    run.root().display()
+                );
+            }
+        }
         let (model, optim, state) = run.load(model, optimizer(&cfg))?;
         let log = MetricsLog::resume(&metrics_path, state.step)?;
         (model, optim, state, log)

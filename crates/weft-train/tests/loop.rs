@@ -459,6 +459,51 @@ fn checkpoints_of_another_run_are_refused_by_name() {
 }
 
 #[test]
+fn a_second_writer_and_a_lost_latest_never_overwrite_checkpoints() {
+    let toy = ToyConfig { hidden: 4 };
+    let cfg = config(6);
+    let mut task = ToyTask::new(&cfg);
+    let dir = temp_dir("lock");
+    let run = run_in(&dir, &cfg, &toy, "toy");
+    // Another process holds the directory: refused, naming it, nothing written.
+    let held = run.lock().unwrap();
+    let err = train(&mut task, fresh(&cfg, &toy), &run, &RunOptions::default()).unwrap_err();
+    assert!(matches!(err, TrainError::Lock(_)), "{err}");
+    assert!(err.to_string().contains("weft train, pid"), "{err}");
+    assert!(!dir.join("config.toml").exists());
+    drop(held);
+    // A stale temporary file of a killed checkpoint write is removed by the next run.
+    std::fs::create_dir_all(dir.join("checkpoints")).unwrap();
+    let stale = dir.join("checkpoints/.step-000003.bpk.999999.0.tmp");
+    std::fs::write(&stale, [0u8; 64]).unwrap();
+    let (straight, _) = train(&mut task, fresh(&cfg, &toy), &run, &RunOptions::default()).unwrap();
+    assert!(!stale.exists());
+
+    // `latest` lost: a fresh start is refused and leaves every checkpoint as it was…
+    let latest = dir.join("checkpoints/latest");
+    std::fs::remove_file(&latest).unwrap();
+    let six = std::fs::read(dir.join("checkpoints/step-000006.bpk")).unwrap();
+    let err = train(&mut task, fresh(&cfg, &toy), &run, &RunOptions::default()).unwrap_err();
+    assert!(matches!(err, TrainError::RunDir { .. }), "{err}");
+    assert!(err.to_string().contains("--resume"), "{err}");
+    assert_eq!(
+        std::fs::read(dir.join("checkpoints/step-000006.bpk")).unwrap(),
+        six
+    );
+    // …and --resume goes on from the newest complete checkpoint.
+    std::fs::remove_file(dir.join("checkpoints/step-000006.state.json")).unwrap();
+    assert_eq!(run.resume_point().unwrap().as_deref(), Some("step-000003"));
+    let resume = RunOptions {
+        resume: true,
+        ..RunOptions::default()
+    };
+    let (resumed, o) = train(&mut task, fresh(&cfg, &toy), &run, &resume).unwrap();
+    assert_eq!(o.steps, 6);
+    assert_eq!(params(&resumed), params(&straight));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn non_finite_losses_skip_the_step_and_stop_when_persistent() {
     let toy = ToyConfig { hidden: 4 };
     let mut cfg = config(12);

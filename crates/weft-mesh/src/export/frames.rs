@@ -44,7 +44,7 @@ impl Frames {
         positions: Vec<[f32; 3]>,
     ) -> Result<Self, ExportError> {
         let mut f = Frames::with_vertex_count(vertex_count)?;
-        if positions.len() % vertex_count != 0 {
+        if !positions.len().is_multiple_of(vertex_count) {
             return Err(ExportError::FrameLength {
                 frame: positions.len() / vertex_count,
                 found: positions.len() % vertex_count,

@@ -1012,7 +1012,7 @@ mod tests {
         let mut root: Value = serde_json::from_slice(&good[20..20 + len]).unwrap();
         edit(&mut root);
         let mut json = serde_json::to_vec(&root).unwrap();
-        while json.len() % 4 != 0 {
+        while !json.len().is_multiple_of(4) {
             json.push(b' ');
         }
         let bin = &good[20 + len..];

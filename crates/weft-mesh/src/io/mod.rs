@@ -9,6 +9,7 @@
 //! Writers go through [`write_atomic`]: a crash or an error never leaves a partial file.
 
 mod atomic;
+pub mod lock;
 pub mod npy;
 pub mod npz;
 mod obj;

@@ -381,7 +381,7 @@ impl Npz {
             && expected
                 .iter()
                 .zip(found)
-                .all(|(e, &f)| e.map_or(true, |e| e == f));
+                .all(|(e, &f)| e.is_none_or(|e| e == f));
         if ok {
             Ok(())
         } else {
