@@ -5,21 +5,8 @@
 use std::collections::HashMap;
 
 use weft_garment::{generate, DressTop, FitBody, GarmentKind, Measurements, Style};
+use weft_mesh::vec3::{cross, dot, sub};
 use weft_mesh::TriMesh;
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
 /// Möller–Trumbore: does segment p→q cross triangle t (strictly inside)?
 fn segment_hits(p: [f64; 3], q: [f64; 3], t: [[f64; 3]; 3]) -> bool {

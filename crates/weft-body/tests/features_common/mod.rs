@@ -4,19 +4,9 @@
 
 use std::collections::HashMap;
 
+use weft_mesh::vec3::{cross, dot, sub};
+
 pub type Mesh = (Vec<[f64; 3]>, Vec<[u32; 3]>);
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 
 /// Six times the signed volume enclosed by a closed mesh (positive when outward).
 pub fn signed_volume6((p, f): &Mesh) -> f64 {
@@ -262,7 +252,6 @@ pub fn inside_by_parity((p, f): &Mesh, q: [f64; 3]) -> bool {
 /// Closest point on a triangle by brute force: dense barycentric sampling is too slow,
 /// so minimise over the interior projection (when inside) and the three edges.
 pub fn brute_triangle_distance(q: [f64; 3], [a, b, c]: [[f64; 3]; 3]) -> f64 {
-    let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
     let seg = |a: [f64; 3], b: [f64; 3]| {
         let ab = sub(b, a);
         let l = dot(ab, ab);
