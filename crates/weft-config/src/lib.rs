@@ -12,31 +12,11 @@
 //!   of the file), so it holds for structs without `deny_unknown_fields`, such as burn's
 //!   `Config` derive, and for `Option` fields the preset leaves unset.
 
-use std::path::{Path, PathBuf};
-
 use serde::{de::DeserializeOwned, Serialize};
 
 /// What can go wrong reading or applying a config file.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    /// The file could not be read.
-    #[error("{}: cannot read the config file", path.display())]
-    Read {
-        /// The file.
-        path: PathBuf,
-        /// The cause.
-        #[source]
-        source: std::io::Error,
-    },
-    /// The file is not TOML.
-    #[error("{}: not a valid TOML file", path.display())]
-    Parse {
-        /// The file.
-        path: PathBuf,
-        /// The cause (line and column).
-        #[source]
-        source: Box<toml::de::Error>,
-    },
     /// A key that the configuration does not have (a typo, or a key of another model).
     #[error("{origin}: unknown key `{key}`; expected one of: {}", expected.join(", "))]
     UnknownKey {
@@ -67,18 +47,6 @@ pub enum ConfigError {
         #[source]
         source: toml::ser::Error,
     },
-}
-
-/// Reads `path` as a TOML table.
-pub fn read_table(path: &Path) -> Result<toml::Table, ConfigError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    toml::from_str(&text).map_err(|source| ConfigError::Parse {
-        path: path.to_path_buf(),
-        source: Box::new(source),
-    })
 }
 
 /// `value` as a TOML table (`what` names it in errors).

@@ -312,7 +312,7 @@ impl DataConfig {
     /// Reads a config file; relative motion file paths are taken from the file's
     /// directory. The result is [`validate`](Self::validate)d.
     pub fn load(path: &Path) -> Result<Self, DataError> {
-        let text = std::fs::read_to_string(path)
+        let text = weft_mesh::io::read_input_to_string(path)
             .map_err(|e| DataError::io(path, "cannot read the dataset config", e))?;
         let mut config = Self::from_toml(&text).map_err(|e| match e {
             DataError::ConfigSyntax { message, .. } => DataError::ConfigSyntax {

@@ -188,14 +188,16 @@ pub fn write(path: &Path, sequence_id: &str, data: &ShardData) -> Result<(), Dat
 /// Reads a shard and checks every tensor against `expected`; errors name the file, the
 /// tensor and the expected dtype and shape.
 pub fn read(path: &Path, expected: ShardShape) -> Result<ShardData, DataError> {
-    let bytes = std::fs::read(path).map_err(|e| DataError::io(path, "cannot read the shard", e))?;
+    let bytes = weft_mesh::io::read_input(path)
+        .map_err(|e| DataError::io(path, "cannot read the shard", e))?;
     decode(path, &bytes, expected)
 }
 
 /// Checks a shard's header and tensor shapes without converting the arrays: what a
 /// resumed run does to decide whether a shard is finished.
 pub fn check(path: &Path, expected: ShardShape) -> Result<(), DataError> {
-    let bytes = std::fs::read(path).map_err(|e| DataError::io(path, "cannot read the shard", e))?;
+    let bytes = weft_mesh::io::read_input(path)
+        .map_err(|e| DataError::io(path, "cannot read the shard", e))?;
     let st = parse(path, &bytes)?;
     for (name, dtype, shape) in layout(expected) {
         tensor(path, &st, name, dtype, &shape)?;

@@ -244,7 +244,7 @@ impl EvalReport {
 
     /// Reads an `eval.json`.
     pub fn read(path: &Path) -> Result<Self, EvalError> {
-        let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io {
+        let text = weft_mesh::io::read_input_to_string(path).map_err(|source| EvalError::Io {
             path: path.to_path_buf(),
             source,
         })?;

@@ -177,7 +177,7 @@ impl RunLayout {
     /// The stem `latest` names; none when there is no `latest` (no checkpoint yet).
     pub fn latest_stem(&self) -> Result<Option<String>, ModelError> {
         let path = self.latest();
-        let text = match std::fs::read_to_string(&path) {
+        let text = match weft_mesh::io::read_input_to_string(&path) {
             Ok(text) => text,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
             Err(source) => return Err(ModelError::RunRead { path, source }),
@@ -235,10 +235,11 @@ fn run_err(path: &Path, message: impl Into<String>) -> ModelError {
 /// (the model's and the trainer's tables included, for their owners to parse).
 pub fn read_run_config(run_dir: &Path) -> Result<(RunHeader, toml::Table), ModelError> {
     let path = RunLayout::new(run_dir).config();
-    let text = std::fs::read_to_string(&path).map_err(|source| ModelError::RunRead {
-        path: path.clone(),
-        source,
-    })?;
+    let text =
+        weft_mesh::io::read_input_to_string(&path).map_err(|source| ModelError::RunRead {
+            path: path.clone(),
+            source,
+        })?;
     let table: toml::Table = toml::from_str(&text).map_err(|source| ModelError::RunToml {
         path: path.clone(),
         source: Box::new(source),

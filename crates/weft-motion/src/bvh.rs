@@ -181,7 +181,7 @@ impl Bvh {
 
     /// Reads and parses a BVH file.
     pub fn read(path: &Path) -> Result<Self, MotionError> {
-        let bytes = std::fs::read(path).map_err(|e| MotionError::io(path, e))?;
+        let bytes = weft_mesh::io::read_input(path).map_err(|e| MotionError::io(path, e))?;
         Bvh::parse(&bytes, path)
     }
 

@@ -295,7 +295,8 @@ impl NameMap {
             path: path.to_path_buf(),
             message,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| MotionError::io(path, e))?;
+        let text =
+            weft_mesh::io::read_input_to_string(path).map_err(|e| MotionError::io(path, e))?;
         let ext = path
             .extension()
             .and_then(|e| e.to_str())

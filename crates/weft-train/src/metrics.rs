@@ -68,7 +68,7 @@ impl MetricsLog {
 
     /// The log at `path` cut back to the records of steps `<= step` (resume).
     pub fn resume(path: &Path, step: usize) -> Result<Self> {
-        let text = match std::fs::read_to_string(path) {
+        let text = match weft_mesh::io::read_input_to_string(path) {
             Ok(t) => t,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
             Err(e) => return Err(TrainError::io(path, e)),

@@ -457,7 +457,7 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 fn read_file(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| TrainError::io(path, e))
+    weft_mesh::io::read_input(path).map_err(|e| TrainError::io(path, e))
 }
 
 fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {

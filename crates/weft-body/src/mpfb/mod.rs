@@ -185,7 +185,8 @@ pub fn import_mpfb(
         ));
     }
     let obj_path = data.join("3dobjs/base.obj");
-    let text = std::fs::read_to_string(&obj_path).map_err(|e| MpfbError::io(&obj_path, e))?;
+    let text =
+        weft_mesh::io::read_input_to_string(&obj_path).map_err(|e| MpfbError::io(&obj_path, e))?;
     let mesh = BaseMesh::parse(&text, &obj_path)?;
     let n_all = mesh.positions.len();
 

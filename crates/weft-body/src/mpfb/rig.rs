@@ -166,7 +166,7 @@ pub fn mean(idx: &[u32], positions: &[[f64; 3]]) -> [f64; 3] {
 }
 
 fn read_json(path: &Path) -> Result<Value, MpfbError> {
-    let text = std::fs::read_to_string(path).map_err(|e| MpfbError::io(path, e))?;
+    let text = weft_mesh::io::read_input_to_string(path).map_err(|e| MpfbError::io(path, e))?;
     serde_json::from_str(&text).map_err(|e| MpfbError::parse(path, e.line(), e.to_string()))
 }
 

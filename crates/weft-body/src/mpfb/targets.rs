@@ -18,7 +18,7 @@ impl Target {
     /// Reads a `.target.gz` (or an uncompressed `.target`) whose indices must be below
     /// `vertex_count`.
     pub fn read(path: &Path, vertex_count: usize) -> Result<Self, MpfbError> {
-        let bytes = std::fs::read(path).map_err(|e| MpfbError::io(path, e))?;
+        let bytes = weft_mesh::io::read_input(path).map_err(|e| MpfbError::io(path, e))?;
         let text = if bytes.starts_with(&[0x1f, 0x8b]) {
             let mut s = String::new();
             flate2::read::GzDecoder::new(&bytes[..])

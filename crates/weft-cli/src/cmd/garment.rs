@@ -250,7 +250,7 @@ fn read_garment(path: &Path) -> Result<GarmentFile> {
     );
     let obj_text = if is_obj {
         Some(
-            std::fs::read_to_string(path)
+            weft_mesh::io::read_input_to_string(path)
                 .with_context(|| format!("cannot read {}", path.display()))?,
         )
     } else {

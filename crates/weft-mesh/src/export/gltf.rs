@@ -588,7 +588,7 @@ pub struct GlbScene {
 /// mesh, float positions, `u32`/`u16` indices); other files fail with a clear error, never
 /// a panic.
 pub fn read_glb(path: &Path) -> Result<GlbScene, ExportError> {
-    let bytes = std::fs::read(path).map_err(|e| ExportError::read(path, e))?;
+    let bytes = crate::io::read_input(path).map_err(|e| ExportError::read(path, e))?;
     parse_glb(&bytes, path)
 }
 

@@ -72,7 +72,7 @@ pub fn write_mdd_to(w: &mut dyn Write, frames: &Frames, times: &[f32]) -> io::Re
 
 /// Reads an MDD file; see [`parse_mdd`].
 pub fn read_mdd(path: &Path) -> Result<Mdd, ExportError> {
-    let bytes = std::fs::read(path).map_err(|e| ExportError::read(path, e))?;
+    let bytes = crate::io::read_input(path).map_err(|e| ExportError::read(path, e))?;
     parse_mdd(&bytes, path)
 }
 

@@ -104,7 +104,7 @@ fn check(frames: &Frames, timing: Pc2Timing) -> Result<(), ExportError> {
 
 /// Reads a PC2 file; see [`parse_pc2`].
 pub fn read_pc2(path: &Path) -> Result<Pc2, ExportError> {
-    let bytes = std::fs::read(path).map_err(|e| ExportError::read(path, e))?;
+    let bytes = crate::io::read_input(path).map_err(|e| ExportError::read(path, e))?;
     parse_pc2(&bytes, path)
 }
 

@@ -9,6 +9,7 @@
 //! Writers go through [`write_atomic`]: a crash or an error never leaves a partial file.
 
 mod atomic;
+mod input;
 pub mod lock;
 pub mod npy;
 pub mod npz;
@@ -16,11 +17,11 @@ mod obj;
 mod ply;
 
 use std::fmt;
-use std::fs;
 use std::io;
 use std::path::Path;
 
 pub use atomic::write_atomic;
+pub use input::{read_input, read_input_to_string, MAX_STREAM_BYTES};
 pub use obj::{load_obj_bytes, write_obj_to};
 pub use ply::{load_ply_bytes, write_ply_graph_to, write_ply_to, PlyEncoding};
 
@@ -164,7 +165,7 @@ pub fn write_ply_graph(
 
 /// The whole file, or an I/O error naming it.
 fn read_bytes(path: &Path) -> Result<Vec<u8>, MeshError> {
-    fs::read(path).map_err(|source| MeshError::Io {
+    read_input(path).map_err(|source| MeshError::Io {
         path: path.to_path_buf(),
         source,
     })

@@ -107,7 +107,8 @@ impl MultilevelRun {
     pub fn resolve(preset: Option<&str>, file: Option<&Path>) -> Result<Self> {
         let table: Option<toml::Table> = match file {
             Some(path) => {
-                let text = std::fs::read_to_string(path).map_err(|e| TrainError::io(path, e))?;
+                let text = weft_mesh::io::read_input_to_string(path)
+                    .map_err(|e| TrainError::io(path, e))?;
                 Some(toml::from_str(&text).map_err(|source| TrainError::Toml {
                     path: path.to_path_buf(),
                     source,
