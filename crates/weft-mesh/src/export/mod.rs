@@ -31,7 +31,7 @@ pub use error::ExportError;
 pub use frames::Frames;
 pub use gltf::{write_glb, GlbMesh, GlbOptions};
 pub use mdd::write_mdd;
-pub use obj_sequence::write_obj_sequence;
+pub use obj_sequence::{remove_obj_sequence, write_obj_sequence};
 pub use pc2::{write_pc2, Pc2Timing};
 
 use crate::mesh::TriMesh;

@@ -434,9 +434,11 @@ mod tests {
             )
         );
         assert!(dir.entries().is_empty());
-        let e = write_npy(&dir.0.join("no/such/x.npy"), &[1], &[1u8]).unwrap_err();
+        // A parent that is a file.
+        std::fs::write(dir.0.join("f"), b"").unwrap();
+        let e = write_npy(&dir.0.join("f/x.npy"), &[1], &[1u8]).unwrap_err();
         assert!(e.to_string().starts_with("cannot write "), "{e}");
-        assert!(dir.entries().is_empty());
+        assert_eq!(dir.entries(), vec!["f"]);
     }
 
     proptest! {

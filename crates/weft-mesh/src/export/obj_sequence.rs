@@ -61,6 +61,7 @@ pub fn write_obj_sequence(
         })?
         .to_string_lossy()
         .into_owned();
+    fs::create_dir_all(&parent).map_err(|e| ExportError::write(dir, e))?;
     let temp = TempDir::create(&parent, &name).map_err(|e| ExportError::write(dir, e))?;
 
     let faces_text = faces_text(faces);
@@ -70,6 +71,18 @@ pub fn write_obj_sequence(
         .map_err(|e| ExportError::write(dir, e))?;
     sync_dir(&parent);
     Ok(())
+}
+
+/// Removes the OBJ sequence a previous export left in `dir`, so that a new run that
+/// writes none leaves no stale frames beside its outputs. Returns whether there was one.
+/// A directory holding anything but `frame_*.obj` files is not touched (an error, as
+/// for [`write_obj_sequence`]).
+pub fn remove_obj_sequence(dir: &Path) -> Result<bool, ExportError> {
+    if let Existing::Nothing = inspect_destination(dir)? {
+        return Ok(false);
+    }
+    fs::remove_dir_all(dir).map_err(|e| ExportError::write(dir, e))?;
+    Ok(true)
 }
 
 /// How many frame files are formatted, written and synced at once.
@@ -374,6 +387,23 @@ mod tests {
         assert_eq!(dir.entries(), vec!["seq"]);
     }
 
+    /// Issue 17 item 12: missing parents are created; a stale sequence is removed only
+    /// when it holds nothing but frames.
+    #[test]
+    fn parents_are_created_and_stale_sequences_removed() {
+        let dir = TestDir::new("objseq-parents");
+        let out = dir.0.join("a/b/seq");
+        write_obj_sequence(&out, &FACES, &frames()).unwrap();
+        assert_eq!(read_obj_sequence(&out).unwrap(), frames());
+        assert!(remove_obj_sequence(&out).unwrap());
+        assert!(!out.exists());
+        assert!(!remove_obj_sequence(&out).unwrap());
+        fs::create_dir(&out).unwrap();
+        fs::write(out.join("notes.txt"), "mine").unwrap();
+        assert!(remove_obj_sequence(&out).is_err());
+        assert_eq!(fs::read_to_string(out.join("notes.txt")).unwrap(), "mine");
+    }
+
     #[test]
     fn refuses_to_replace_other_files_and_bad_input() {
         let dir = TestDir::new("objseq-refuse");
@@ -408,7 +438,7 @@ mod tests {
             "{e}"
         );
 
-        let e = write_obj_sequence(&dir.0.join("no/such/seq"), &FACES, &frames()).unwrap_err();
+        let e = write_obj_sequence(&dir.0.join("file/seq"), &FACES, &frames()).unwrap_err();
         assert!(matches!(e, ExportError::Write { .. }), "{e}");
         assert_eq!(dir.entries(), vec!["file", "seq"]);
     }

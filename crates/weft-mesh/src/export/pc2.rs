@@ -239,8 +239,9 @@ mod tests {
             .to_string()
             .starts_with("frame 1, vertex 1: the x coordinate is NaN"));
         assert!(dir.entries().is_empty());
-        let e = write_pc2(&dir.0.join("no/a.pc2"), &frames(), Pc2Timing::default()).unwrap_err();
+        std::fs::write(dir.0.join("f"), b"").unwrap();
+        let e = write_pc2(&dir.0.join("f/a.pc2"), &frames(), Pc2Timing::default()).unwrap_err();
         assert!(e.to_string().starts_with("cannot write "), "{e}");
-        assert!(dir.entries().is_empty());
+        assert_eq!(dir.entries(), vec!["f"]);
     }
 }

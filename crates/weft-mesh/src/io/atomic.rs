@@ -19,7 +19,8 @@ static COUNTER: AtomicU64 = AtomicU64::new(0);
 const MAX_ATTEMPTS: u32 = 64;
 
 /// Writes `path` atomically: `write` fills a buffered writer on a temporary file beside
-/// `path`, which then replaces `path` by a rename.
+/// `path`, which then replaces `path` by a rename. Missing parent directories are
+/// created.
 ///
 /// Errors are those of the operating system or of `write`; they carry no path, so wrap
 /// them with the destination when reporting (see [`crate::MeshError::Io`]). Callers with
@@ -67,6 +68,8 @@ fn create_temp(path: &Path) -> io::Result<(File, PathBuf)> {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
+    // Missing parent directories are created, as for every weft output.
+    fs::create_dir_all(dir)?;
     let mut last = None;
     for _ in 0..MAX_ATTEMPTS {
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
@@ -154,11 +157,14 @@ mod tests {
     }
 
     #[test]
-    fn missing_directory_is_an_error() {
+    fn missing_parents_are_created_but_not_through_a_file() {
         let dir = TestDir::new("atomic-missing");
         let path = dir.0.join("no/such/dir/out.txt");
-        let err = write_atomic(&path, |w| w.write_all(b"x")).unwrap_err();
-        assert_eq!(err.kind(), io::ErrorKind::NotFound);
+        write_atomic(&path, |w| w.write_all(b"x")).unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"x");
+        let under_file = path.join("out.txt");
+        assert!(write_atomic(&under_file, |w| w.write_all(b"x")).is_err());
+        assert_eq!(fs::read(&path).unwrap(), b"x");
     }
 
     #[test]
