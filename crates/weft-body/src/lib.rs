@@ -20,6 +20,6 @@ pub mod skinning;
 pub use default_body::default_body;
 pub use error::BodyError;
 pub use joints::Pose;
-pub use model::{BodyModel, BodyParts, ShapedBody};
+pub use model::{BodyModel, BodyParts, ShapedBody, BETA_LIMIT};
 pub use posed::PosedSequence;
 pub use skinning::Skinning;

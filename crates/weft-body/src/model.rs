@@ -30,6 +30,14 @@ use crate::skinning::{skin_with, SkinWeights, Skinning};
 /// Pose blend shape features per non-root joint: the 9 entries of `R_j − I`.
 pub const POSE_FEATURES_PER_JOINT: usize = 9;
 
+/// The largest |β| weft accepts without being told otherwise. SMPL-format shape spaces
+/// are principal components scaled to unit variance over the scanned population, so
+/// |β| ≤ 3 holds for nearly everyone and 5 is already an extreme body; the linear model
+/// keeps extrapolating past that into bodies no person has (β₁ = 100 is 3.9 m tall,
+/// 1e308 puts vertices at 1e306 m). Commands refuse larger values unless told
+/// `--allow-extreme-shapes`.
+pub const BETA_LIMIT: f64 = 5.0;
+
 /// Tolerance on each row sum of `weights` (they must sum to 1).
 const WEIGHT_SUM_TOLERANCE: f64 = 1e-3;
 /// Tolerance on each row sum of `J_regressor`: joints must be weighted averages of

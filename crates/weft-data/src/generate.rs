@@ -120,7 +120,11 @@ impl SequenceSimulator for Physics {
             input.betas,
             input.motion,
             &opts,
-            &mut |_| on_frame(),
+            &mut |p| {
+                if let weft_sim::SequenceProgress::Frame(_) = p {
+                    on_frame()
+                }
+            },
         ) {
             Ok(s) => Ok(SimOutcome::Finished {
                 stats: stats_json(&s.stats),

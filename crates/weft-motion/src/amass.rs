@@ -46,7 +46,7 @@ use super::error::MotionError;
 use super::rest::DEFAULT_REST_JOINTS;
 use super::retarget::UpAxis;
 use super::rot::{axis_angle, quat};
-use super::types::{Motion, MAX_FRAMES};
+use super::types::{Motion, MAX_FPS, MAX_FRAMES};
 use weft_body::joints::SMPL_JOINT_COUNT;
 use weft_body::Pose;
 
@@ -245,10 +245,10 @@ pub fn amass_from_npz(
             }
         },
     };
-    if !(fps.is_finite() && fps > 0.0) {
+    if !(fps.is_finite() && fps > 0.0 && fps <= MAX_FPS) {
         return Err(bad(
             frame_rate_key.unwrap_or(""),
-            format!("frame rate {fps}; expected frames per second above 0"),
+            format!("frame rate {fps}; expected frames per second above 0 and at most {MAX_FPS}"),
         ));
     }
     let betas = if npz.contains("betas") {

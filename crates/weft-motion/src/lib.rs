@@ -60,5 +60,5 @@ pub use retarget::{
 };
 pub use smpl_bvh::{motion_to_bvh, smpl_bvh_skeleton, write_bvh};
 pub use stats::{motion_stats, JointRange, MotionStats};
-pub use types::{Motion, MotionDistance, MAX_FRAMES};
+pub use types::{Motion, MotionDistance, MAX_FPS, MAX_FRAMES};
 pub use weft_body::Pose;

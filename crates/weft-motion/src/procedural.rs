@@ -35,7 +35,7 @@ use super::fk::posed_joints;
 use super::limits::{soft_limit, soft_limit_pose};
 use super::rest::DEFAULT_REST_JOINTS;
 use super::rot::about_axis;
-use super::types::{Motion, MAX_FRAMES};
+use super::types::{Motion, MAX_FPS, MAX_FRAMES};
 
 /// The motions of the procedural library.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -165,9 +165,9 @@ impl ProceduralParams {
                 self.frames
             ));
         }
-        if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= 1000.0) {
+        if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= MAX_FPS) {
             return bad(format!(
-                "frame rate {}; expected frames per second above 0 and at most 1000",
+                "frame rate {}; expected frames per second above 0 and at most {MAX_FPS}",
                 self.fps
             ));
         }

@@ -9,16 +9,16 @@
 
 use super::error::MotionError;
 use super::rot::{axis_angle, quat};
-use super::types::{Motion, MAX_FRAMES};
+use super::types::{Motion, MAX_FPS, MAX_FRAMES};
 use weft_body::Pose;
 
 /// The motion at `fps` frames per second (see the module documentation). Fails for a
 /// non-positive or non-finite rate, or when the result would exceed [`MAX_FRAMES`]
 /// (checked before allocating).
 pub fn resample(motion: &Motion, fps: f64) -> Result<Motion, MotionError> {
-    if !(fps.is_finite() && fps > 0.0) {
+    if !(fps.is_finite() && fps > 0.0 && fps <= MAX_FPS) {
         return Err(MotionError::Parameter(format!(
-            "target frame rate {fps}; expected frames per second above 0"
+            "target frame rate {fps}; expected frames per second above 0 and at most {MAX_FPS}"
         )));
     }
     let src_fps = motion.fps();

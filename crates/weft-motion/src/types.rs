@@ -13,6 +13,12 @@ use weft_body::Pose;
 /// motions before allocating.
 pub const MAX_FRAMES: usize = 10_000_000;
 
+/// The highest frame rate a motion may have. Optical capture runs at 60 to 480 Hz and
+/// high-speed systems rarely above 1 000; a larger rate in a file is a damaged header
+/// (or seconds per frame read as frames per second), and would make time steps too small
+/// for the simulator to mean anything.
+pub const MAX_FPS: f64 = 1000.0;
+
 /// A body motion in SMPL's parametrisation.
 ///
 /// Conventions (those of the SMPL model itself, which weft keeps everywhere):
@@ -52,9 +58,9 @@ impl Motion {
         trans: Vec<[f32; 3]>,
         betas: Option<Vec<f32>>,
     ) -> Result<Self, MotionError> {
-        if !(fps.is_finite() && fps > 0.0) {
+        if !(fps.is_finite() && fps > 0.0 && fps <= MAX_FPS) {
             return Err(MotionError::Invalid(format!(
-                "frame rate {fps}; expected a finite number of frames per second above 0"
+                "frame rate {fps}; expected frames per second above 0 and at most {MAX_FPS}"
             )));
         }
         if poses.is_empty() {

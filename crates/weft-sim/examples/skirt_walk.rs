@@ -8,7 +8,7 @@
 
 use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_sim::sequence::test_skirt;
-use weft_sim::{simulate_sequence, Material, SequenceOptions};
+use weft_sim::{simulate_sequence, Material, SequenceOptions, SequenceProgress};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -64,7 +64,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         skirt.vertex_count(),
         skirt.face_count()
     );
-    let seq = simulate_sequence(&skirt, &material, &body, &[], &motion, &opts, &mut |s| {
+    let seq = simulate_sequence(&skirt, &material, &body, &[], &motion, &opts, &mut |p| {
+        let SequenceProgress::Frame(s) = p else {
+            return;
+        };
         println!(
             "frame {:3}: {:.3} s, newton {:4}, cg {:6}, strain max {:.4} mean {:.5}, inside {} ({:.2e} m)",
             s.frame, s.seconds, s.newton_iterations, s.cg_iterations, s.max_edge_strain,

@@ -36,6 +36,26 @@ pub struct PosedBody {
     query_radius: f64,
 }
 
+/// The farthest a garment may start from the body at its closest vertex (m). Garments
+/// are worn: a waistband or neckline touches the body, and even a loose dress hangs
+/// within centimetres of the shoulders. Half a metre of air everywhere means the mesh is
+/// in another frame or unit, and simulating it would silently produce a garment falling
+/// beside the body.
+pub const MAX_GARMENT_GAP: f64 = 0.5;
+
+/// Refuses a garment whose every vertex is more than [`MAX_GARMENT_GAP`] from the body,
+/// given the vertices' signed distances.
+pub fn check_garment_gap(signed: impl IntoIterator<Item = f64>) -> Result<(), SimError> {
+    let gap = signed.into_iter().fold(f64::INFINITY, f64::min);
+    if gap > MAX_GARMENT_GAP {
+        return Err(SimError::OffBody {
+            gap,
+            max: MAX_GARMENT_GAP,
+        });
+    }
+    Ok(())
+}
+
 /// How many garment vertices lie inside the body, and how deep the deepest is.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Penetration {

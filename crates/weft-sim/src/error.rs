@@ -89,6 +89,15 @@ pub enum SimError {
     /// non-finite vertex, a refit with another vertex count).
     #[error("the body surface could not be built or updated")]
     BodySurface(#[from] weft_body::query::QueryError),
+    /// Every garment vertex is far from the body: a garment in another frame, in
+    /// centimetres, or moved away.
+    #[error("the garment's nearest vertex is {gap:.3} m from the body, more than {max} m; expected a garment on the body in its rest pose (metres, the body's frame), as `weft garment generate` or `weft garment prepare` write them")]
+    OffBody {
+        /// The smallest distance of a garment vertex to the body surface (m).
+        gap: f64,
+        /// [`crate::body::MAX_GARMENT_GAP`].
+        max: f64,
+    },
     /// The simulation produced non-finite positions or did not converge.
     #[error("step diverged: {message}")]
     Diverged {

@@ -45,7 +45,7 @@ mod fd_tests;
 
 pub use attachment::{Attachment, SkinAnchors};
 pub use bending::{Bending, BendingScale, RestAngle};
-pub use body::{Penetration, PosedBody};
+pub use body::{check_garment_gap, Penetration, PosedBody, MAX_GARMENT_GAP};
 pub use collision::CubicCollision;
 pub use contact::{BodyContact, BodyProximity, Plane, Sphere, VertexContact};
 pub use energy::{gradient_of, hessian_of, hessian_pattern_of, Energy, HessianKind};
@@ -58,7 +58,8 @@ pub use membrane::RestFrames;
 pub use penalties::{LinearCollision, UvShear, UvStretch};
 pub use potential::{IncrementalPotential, Term, WeightedTerm};
 pub use sequence::{
-    simulate_sequence, FrameStats, SequenceError, SequenceOptions, SimulatedSequence,
+    simulate_sequence, FrameStats, SequenceError, SequenceOptions, SequenceProgress,
+    SimulatedSequence, MAX_WARMUP_FRAMES,
 };
 pub use solver::{ClothSimulator, NewtonOptions, SimOptions};
 pub use sparse::{BlockCsr, ElementSlots, PatternBuilder};

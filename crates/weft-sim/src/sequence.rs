@@ -20,7 +20,7 @@ use weft_mesh::TriMesh;
 use weft_motion::Motion;
 
 use crate::attachment::{Attachment, SkinAnchors};
-use crate::body::{Penetration, PosedBody};
+use crate::body::{check_garment_gap, Penetration, PosedBody};
 use crate::energy::Energy;
 use crate::error::SimError;
 use crate::material::Material;
@@ -85,6 +85,25 @@ impl Default for SequenceOptions {
             attachment: Attachment::TopOpening,
         }
     }
+}
+
+/// The most warm-up frames a sequence may ask for: 10 000 frames is over five minutes
+/// at 30 fps of draping before the motion starts, far past what any garment needs to
+/// settle; more is a typo that would run for hours.
+pub const MAX_WARMUP_FRAMES: usize = 10_000;
+
+/// What [`simulate_sequence`] reports as it goes, for progress bars.
+#[derive(Clone, Copy, Debug)]
+pub enum SequenceProgress<'a> {
+    /// Warm-up frame `done` of `total` is finished (no output frame yet).
+    Warmup {
+        /// Warm-up frames finished.
+        done: usize,
+        /// Warm-up frames in all.
+        total: usize,
+    },
+    /// An output frame is finished.
+    Frame(&'a FrameStats),
 }
 
 /// What one output frame looked like and cost.
@@ -268,8 +287,9 @@ fn potential_energy(sim: &ClothSimulator) -> Result<f64, SimError> {
 /// The first `warmup_frames` blend from the rest pose to the motion's first frame
 /// (draping the garment and letting it settle); then one output frame per motion frame
 /// (output frame 0 is the state after the warm-up), each made of `opts.substeps`
-/// implicit-Euler steps with the body interpolated continuously in between. `on_frame`
-/// is called after each output frame (progress bars).
+/// implicit-Euler steps with the body interpolated continuously in between. `progress`
+/// is told of each warm-up frame and each output frame (progress bars). At most
+/// [`MAX_WARMUP_FRAMES`] warm-up frames.
 pub fn simulate_sequence(
     garment: &TriMesh,
     material: &Material,
@@ -277,13 +297,21 @@ pub fn simulate_sequence(
     betas: &[f64],
     motion: &Motion,
     opts: &SequenceOptions,
-    on_frame: &mut dyn FnMut(&FrameStats),
+    progress: &mut dyn FnMut(SequenceProgress<'_>),
 ) -> Result<SimulatedSequence, SequenceError> {
     if opts.substeps == 0 {
         return Err(SimError::InvalidParameter {
             what: "sub-steps per frame".into(),
             value: 0.0,
             expected: "expected at least 1",
+        }
+        .into());
+    }
+    if opts.warmup_frames > MAX_WARMUP_FRAMES {
+        return Err(SimError::InvalidParameter {
+            what: "warm-up frames".into(),
+            value: opts.warmup_frames as f64,
+            expected: "expected at most 10000 (MAX_WARMUP_FRAMES)",
         }
         .into());
     }
@@ -330,6 +358,7 @@ pub fn simulate_sequence(
     for p in &mut start.positions {
         *p = add_scaled(*p, t0, 1.0);
     }
+    check_garment_gap(posed.signed_distances(&start.positions)?)?;
     let pushed_out = push_out(
         &posed,
         &mut start.positions,
@@ -369,7 +398,7 @@ pub fn simulate_sequence(
             clock,
             &mut out,
         )?;
-        on_frame(&frame_stats);
+        progress(SequenceProgress::Frame(&frame_stats));
         frame_stats = FrameStats::default();
         clock = Instant::now();
     }
@@ -423,9 +452,14 @@ pub fn simulate_sequence(
                 clock,
                 &mut out,
             )?;
-            on_frame(&frame_stats);
+            progress(SequenceProgress::Frame(&frame_stats));
             frame_stats = FrameStats::default();
             clock = Instant::now();
+        } else {
+            progress(SequenceProgress::Warmup {
+                done: k,
+                total: first_output,
+            });
         }
     }
     Ok(out)
@@ -622,10 +656,13 @@ mod tests {
             &[],
             &walk(5),
             &opts,
-            &mut |s| seen.push(s.frame),
+            &mut |p| match p {
+                SequenceProgress::Warmup { done, total } => seen.push(format!("w{done}/{total}")),
+                SequenceProgress::Frame(s) => seen.push(format!("f{}", s.frame)),
+            },
         )
         .unwrap();
-        assert_eq!(seen, vec![0, 1, 2, 3, 4]);
+        assert_eq!(seen, ["w1/3", "w2/3", "f0", "f1", "f2", "f3", "f4"]);
         assert_eq!(seq.frames.len(), 5);
         assert_eq!(seq.frames[0].len(), skirt.vertex_count());
         for s in &seq.stats {
@@ -639,6 +676,60 @@ mod tests {
         // The skirt moves with the body (walking forward along +Z).
         let z = |f: &Vec<[f32; 3]>| f.iter().map(|p| p[2]).sum::<f32>() / f.len() as f32;
         assert!(z(&seq.frames[4]) > z(&seq.frames[0]) + 0.05);
+    }
+
+    /// Issue 17 item 6: a garment a kilometre from the body is refused, not simulated
+    /// falling beside it.
+    #[test]
+    fn a_garment_far_from_the_body_is_refused() {
+        let body = weft_body::default_body().unwrap();
+        let rest = body.shaped(&[]).unwrap().vertices;
+        let mut skirt = test_skirt(&rest, 8, 3);
+        for p in &mut skirt.positions {
+            p[0] += 1000.0;
+        }
+        let e = simulate_sequence(
+            &skirt,
+            &Material::cotton(),
+            &body,
+            &[],
+            &walk(2),
+            &SequenceOptions::default(),
+            &mut |_| panic!("no frame may start"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("nearest vertex is 99") && e.contains("m from the body"),
+            "{e}"
+        );
+    }
+
+    /// Issue 17 item 8: a warm-up past the bound is refused before any work.
+    #[test]
+    fn an_endless_warm_up_is_refused() {
+        let body = weft_body::default_body().unwrap();
+        let rest = body.shaped(&[]).unwrap().vertices;
+        let skirt = test_skirt(&rest, 8, 3);
+        let opts = SequenceOptions {
+            warmup_frames: 1_000_000_000,
+            ..SequenceOptions::default()
+        };
+        let e = simulate_sequence(
+            &skirt,
+            &Material::cotton(),
+            &body,
+            &[],
+            &walk(2),
+            &opts,
+            &mut |_| panic!("no frame may start"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("warm-up frames") && e.contains("at most 10000"),
+            "{e}"
+        );
     }
 
     /// A step that diverges ends the run with the frame named and the finished frames

@@ -163,6 +163,7 @@ pub fn drape(
         .with_query_radius(options.sim.contact_radius.max(options.sim.friction_radius))?;
 
     let signed = posed.signed_distances(&garment.positions)?;
+    weft_sim::check_garment_gap(signed.iter().copied())?;
     let before = posed.penetration(&garment.positions, eps)?;
     let too_deep: Vec<usize> = (0..signed.len())
         .filter(|&i| signed[i] < -options.max_start_depth)

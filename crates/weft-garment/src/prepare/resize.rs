@@ -113,6 +113,7 @@ pub fn resize(
         .map(|(b1, b0)| sub(*b1, *b0))
         .collect();
     let closest = from.surface.closest_points(&garment.positions)?;
+    weft_sim::check_garment_gap(closest.iter().map(|c| c.signed_distance))?;
     let tree = VertexTree::new(&from.mesh.positions)?;
     let mut field = Vec::with_capacity(garment.vertex_count());
     for (&x, c) in garment.positions.iter().zip(&closest) {
