@@ -49,6 +49,29 @@ pub enum ConfigError {
     },
 }
 
+/// Parses `text` as a TOML table; a syntax error is one line (see [`syntax_message`]).
+pub fn parse_table(text: &str) -> Result<toml::Table, String> {
+    toml::from_str(text).map_err(|e| syntax_message(text, &e))
+}
+
+/// A TOML error as one line, `line L, column C: message`. toml's own `Display` draws
+/// the offending line and a caret over several lines, which breaks weft's rule of one
+/// line per error (and repeats the user's file back at them).
+pub fn syntax_message(text: &str, error: &toml::de::Error) -> String {
+    let at = error.span().map(|span| {
+        let before = &text[..span.start.min(text.len())];
+        let line = before.matches('\n').count() + 1;
+        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+        let column = before[line_start..].chars().count() + 1;
+        format!("line {line}, column {column}: ")
+    });
+    format!(
+        "{}{}",
+        at.unwrap_or_default(),
+        error.message().trim_end().replace('\n', "; ")
+    )
+}
+
 /// `value` as a TOML table (`what` names it in errors).
 pub fn to_table<T: Serialize>(what: &str, value: &T) -> Result<toml::Table, ConfigError> {
     toml::Table::try_from(value).map_err(|source| ConfigError::Serialize {
@@ -157,6 +180,15 @@ fn find_unknown(
 
 #[cfg(test)]
 mod tests {
+    /// One line, with the position, for a syntax error (issue 17 item 13).
+    #[test]
+    fn syntax_errors_are_one_line_with_the_position() {
+        let e = super::parse_table("a = 1\nb = \n").unwrap_err();
+        assert!(e.starts_with("line 2, column 5: "), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+        assert!(super::parse_table("a = 1").is_ok());
+    }
+
     use serde::Deserialize;
 
     use super::*;

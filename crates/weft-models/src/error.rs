@@ -77,13 +77,12 @@ pub enum ModelError {
         source: std::io::Error,
     },
     /// A run's config.toml that is not TOML.
-    #[error("{}: not valid TOML", path.display())]
+    #[error("{}: not valid TOML: {message}", path.display())]
     RunToml {
         /// The file.
         path: PathBuf,
-        /// The cause (line and column).
-        #[source]
-        source: Box<toml::de::Error>,
+        /// The cause, with its line and column.
+        message: String,
     },
     /// A run's config.toml naming a model this build does not know.
     #[error("{}: model_kind", path.display())]

@@ -240,9 +240,9 @@ pub fn read_run_config(run_dir: &Path) -> Result<(RunHeader, toml::Table), Model
             path: path.clone(),
             source,
         })?;
-    let table: toml::Table = toml::from_str(&text).map_err(|source| ModelError::RunToml {
+    let table = weft_config::parse_table(&text).map_err(|message| ModelError::RunToml {
         path: path.clone(),
-        source: Box::new(source),
+        message,
     })?;
     let header = RunHeader::from_table(&table, &path)?;
     Ok((header, table))

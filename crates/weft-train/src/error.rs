@@ -34,13 +34,12 @@ pub enum TrainError {
         message: String,
     },
     /// A config file that is not valid TOML.
-    #[error("{}: not valid TOML", path.display())]
+    #[error("{}: not valid TOML: {message}", path.display())]
     Toml {
         /// The file.
         path: PathBuf,
-        /// The cause (line and column).
-        #[source]
-        source: toml::de::Error,
+        /// The cause, with its line and column.
+        message: String,
     },
     /// A trainer state or metrics record that is not valid JSON.
     #[error("{}: not a valid training record", path.display())]

@@ -389,10 +389,10 @@ impl RunDir {
                 expected: self.header.preset.clone(),
             });
         }
-        let model_table: toml::Table =
-            toml::from_str(&state.model).map_err(|source| TrainError::Toml {
+        let model_table =
+            weft_config::parse_table(&state.model).map_err(|message| TrainError::Toml {
                 path: state_path.clone(),
-                source,
+                message,
             })?;
         if let Some((field, found, expected)) =
             first_difference("model.", &model_table, &self.model_toml)

@@ -264,9 +264,9 @@ impl MultilevelConfig {
 
     /// A config from TOML; missing fields take their defaults (the `cpu` preset's).
     pub fn from_toml(text: &str) -> Result<Self, ModelError> {
-        let table: toml::Table = toml::from_str(text).map_err(|e| ModelError::RunToml {
+        let table = weft_config::parse_table(text).map_err(|message| ModelError::RunToml {
             path: "<model config>".into(),
-            source: Box::new(e),
+            message,
         })?;
         Self::from_table(&table, "<model config>")
     }

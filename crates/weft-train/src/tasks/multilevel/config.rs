@@ -109,10 +109,12 @@ impl MultilevelRun {
             Some(path) => {
                 let text = weft_mesh::io::read_input_to_string(path)
                     .map_err(|e| TrainError::io(path, e))?;
-                Some(toml::from_str(&text).map_err(|source| TrainError::Toml {
-                    path: path.to_path_buf(),
-                    source,
-                })?)
+                Some(
+                    weft_config::parse_table(&text).map_err(|message| TrainError::Toml {
+                        path: path.to_path_buf(),
+                        message,
+                    })?,
+                )
             }
             None => None,
         };
