@@ -6,8 +6,8 @@
 
 use weft_data::manifest::Job;
 use weft_data::{
-    generate, DataConfig, GarmentSpec, GenerateOptions, MotionSpec, SequenceSimulator, Silent,
-    SimInput, SimOutcome,
+    generate, DataConfig, Dataset, GarmentSpec, GenerateOptions, MotionSpec, SequenceSimulator,
+    Silent, SimInput, SimOutcome,
 };
 
 mod common;
@@ -145,6 +145,74 @@ fn info_shows_splits_and_diverged_sequences() {
     assert_eq!(v["splits"][0]["sequences"], 2);
     assert_eq!(v["problems"][0]["status"], "diverged");
     assert!(v["disk_bytes"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn verify_fails_naming_a_shard_changed_after_it_was_written() {
+    let dir = scratch("verify-changed");
+    generate(
+        &small_config(),
+        &dir,
+        &GenerateOptions::default(),
+        &StandIn,
+        &Silent,
+    )
+    .unwrap();
+    let victim = Dataset::open(&dir).unwrap().records()[0].clone();
+    // Move the first vertex of the first frame by 0.5 m, in place.
+    let path = dir.join(&victim.shard);
+    let mut bytes = std::fs::read(&path).unwrap();
+    let header_len = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + header_len]).unwrap();
+    let at = 8 + header_len + header["positions"]["data_offsets"][0].as_u64().unwrap() as usize;
+    let x = f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) + 0.5;
+    bytes[at..at + 4].copy_from_slice(&x.to_le_bytes());
+    std::fs::write(&path, &bytes).unwrap();
+
+    let o = weft(&["data", "info", s(&dir), "--verify"]);
+    assert!(!o.status.success(), "{}", stdout(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains(&format!("broken shard: {}", victim.id))
+            && out.contains(&victim.shard)
+            && out.contains("changed since it was written")
+            && out.contains("to repair: run `weft data generate`"),
+        "{out}"
+    );
+    let err = stderr(&o);
+    assert!(
+        err.contains("1 of 4 shards")
+            && err.contains(&victim.shard)
+            && err.contains("weft data generate"),
+        "{err}"
+    );
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    // Without --verify the summary does not read the shards.
+    assert!(weft(&["data", "info", s(&dir)]).status.success());
+}
+
+#[test]
+fn more_beta_components_than_the_body_has_are_refused_naming_the_file() {
+    let dir = scratch("beta-components");
+    let mut c = small_config();
+    c.beta_components = 100;
+    let config = dir.join("many-betas.toml");
+    std::fs::write(&config, c.to_toml().unwrap()).unwrap();
+    let out = dir.join("out");
+    let o = weft(&["data", "generate", "--config", s(&config), "--out", s(&out)]);
+    assert!(!o.status.success(), "{}", stdout(&o));
+    let err = stderr(&o);
+    for needle in [
+        "many-betas.toml",
+        "beta_components",
+        "100",
+        "10 shape components",
+        "0 to 10",
+    ] {
+        assert!(err.contains(needle), "{needle:?} not in {err}");
+    }
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(!out.join("manifest.json").exists());
 }
 
 #[test]

@@ -100,8 +100,25 @@ impl Dataset {
     }
 
     /// Reads a sequence's shard, checking every tensor's dtype and shape against the
-    /// record.
+    /// record. The bytes are not compared with the recorded SHA-256 (training reads
+    /// shards again every epoch); [`load_verified`](Self::load_verified) does that.
     pub fn load(&self, record: &SequenceRecord) -> Result<Sequence, DataError> {
+        self.load_checked(record, None)
+    }
+
+    /// [`load`](Self::load), after checking that the shard's SHA-256 is the one the
+    /// manifest recorded (when it recorded one, see [`SequenceRecord::sha256`]): a shard
+    /// changed since it was written is [`DataError::Digest`]. What `weft data info
+    /// --verify` does.
+    pub fn load_verified(&self, record: &SequenceRecord) -> Result<Sequence, DataError> {
+        self.load_checked(record, record.sha256.as_deref())
+    }
+
+    fn load_checked(
+        &self,
+        record: &SequenceRecord,
+        sha256: Option<&str>,
+    ) -> Result<Sequence, DataError> {
         if !record.has_frames() {
             return Err(DataError::NotGenerated {
                 id: record.id.clone(),
@@ -109,7 +126,7 @@ impl Dataset {
             });
         }
         let path = self.dir.join(&record.shard);
-        let data = shard::read(&path, shape_of(record))?;
+        let data = shard::read_checked(&path, shape_of(record), sha256)?;
         let garment = TriMesh::new(
             data.rest_positions
                 .iter()

@@ -77,6 +77,17 @@ pub enum DataError {
         /// What the file holds (`missing`, `u32 [40, 712, 3]`, …).
         found: String,
     },
+    /// A shard's bytes are not the ones written: their SHA-256 differs from the one the
+    /// manifest recorded (a value edited, a file replaced, a bit flipped on disk).
+    #[error("{}: changed since it was written: its SHA-256 is {found}, the manifest records {expected}", .path.display())]
+    Digest {
+        /// The shard file.
+        path: PathBuf,
+        /// The SHA-256 the manifest records (lowercase hex).
+        expected: String,
+        /// The file's SHA-256 now.
+        found: String,
+    },
     /// A garment, body, motion or sequence id the dataset does not list.
     #[error("{kind} {id:?} is not in the dataset {}", .dir.display())]
     UnknownId {

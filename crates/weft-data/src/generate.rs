@@ -6,8 +6,12 @@
 //! (rayon, one sequence per task; the simulator parallelises inside a step too).
 //!
 //! Resuming: a sequence whose manifest record is done (or diverged) and whose shard is
-//! present with the expected header and tensor shapes is kept; anything else — no
-//! shard, a torn or foreign file, a temporary file left by a kill — is simulated again.
+//! present, has the SHA-256 the manifest recorded and the expected header and tensor
+//! shapes is kept; anything else — no shard, a torn or foreign file, a shard changed
+//! since it was written, a temporary file left by a kill — is simulated again, and the
+//! progress says which and why. A record from a manifest written before digests were
+//! kept has no SHA-256 to compare: its shard is checked as before and its digest is
+//! recorded now.
 //! Shards and stats are written to temporary files and renamed, and the manifest is
 //! rewritten atomically after each finished shard, so a kill at any moment loses at most
 //! the sequences in flight.
@@ -193,6 +197,13 @@ pub struct GenerateReport {
     pub diverged: Vec<(String, usize)>,
     /// Failed in this run (`(sequence id, reason)`).
     pub failed: Vec<(String, String)>,
+    /// Sequences the manifest said were finished but whose shard was missing, broken or
+    /// changed since it was written, so they were simulated again (`(sequence id,
+    /// reason)`).
+    pub redone: Vec<(String, String)>,
+    /// Kept shards whose SHA-256 was recorded by this run (their manifest predates
+    /// digests).
+    pub digests_recorded: usize,
     /// Frames simulated in this run.
     pub frames: usize,
     /// Wall time of the simulation stage, s.
@@ -249,7 +260,13 @@ pub fn generate(
             .map_or_else(|| MANIFEST_FILE.to_string(), |j| j.manifest_file()),
     );
     let owns = |i: usize| options.job.map_or(true, |j| j.owns(i));
-    let kept = resume(&mut manifest, &manifest_path, out, &owns)?;
+    let resumed = resume(&mut manifest, &manifest_path, out, &owns)?;
+    let kept = resumed.kept;
+    for (id, why) in &resumed.redone {
+        progress.message(&format!(
+            "sequence {id}: the manifest says it is finished but {why}; simulating it again"
+        ));
+    }
     manifest.write(&manifest_path)?;
 
     write_garment_templates(&manifest.garments, &model, out)?;
@@ -340,6 +357,8 @@ pub fn generate(
             done: 0,
             diverged: Vec::new(),
             failed: Vec::new(),
+            redone: resumed.redone,
+            digests_recorded: resumed.digests_recorded,
             frames: 0,
             seconds: 0.0,
         },
@@ -413,15 +432,26 @@ fn betas_f64(b: &[f32]) -> Vec<f64> {
     b.iter().map(|&x| f64::from(x)).collect()
 }
 
+/// What [`resume`] took over.
+struct Resumed {
+    /// Owned sequences kept.
+    kept: usize,
+    /// Owned sequences the old manifest called finished whose shard or stats file was
+    /// missing, broken or changed: `(id, why)`.
+    redone: Vec<(String, String)>,
+    /// Kept sequences whose SHA-256 was recorded now (the old manifest had none).
+    digests_recorded: usize,
+}
+
 /// Takes over what an existing manifest at `path` says is finished, after checking the
-/// shards; returns how many owned sequences are kept. Refuses a manifest of another
-/// plan. Removes temporary files that killed runs left for owned sequences.
+/// shards against their recorded SHA-256, header and shapes. Refuses a manifest of
+/// another plan. Removes temporary files that killed runs left for owned sequences.
 fn resume(
     manifest: &mut Manifest,
     path: &Path,
     out: &Path,
     owns: &dyn Fn(usize) -> bool,
-) -> Result<usize, DataError> {
+) -> Result<Resumed, DataError> {
     for s in manifest.sequences.iter().filter(|s| owns(s.index)) {
         for rel in [&s.shard, &s.stats] {
             remove_temp_files(&out.join(rel))?;
@@ -435,8 +465,13 @@ fn resume(
             remove_temp_files(&out.join(&g.file))?;
         }
     }
+    let mut resumed = Resumed {
+        kept: 0,
+        redone: Vec::new(),
+        digests_recorded: 0,
+    };
     if !path.exists() {
-        return Ok(0);
+        return Ok(resumed);
     }
     let old = Manifest::read(path)?;
     let same_plan = old.config == manifest.config
@@ -458,15 +493,41 @@ fn resume(
             message: "the directory holds a dataset generated from another config, seed, body model or --shard split; use a new directory (or delete this one) to generate this config".into(),
         });
     }
-    let mut kept = 0;
-    for (new, old) in manifest.sequences.iter_mut().zip(old.sequences) {
+    for (new, mut old) in manifest.sequences.iter_mut().zip(old.sequences) {
         if !owns(new.index) {
             continue;
         }
         let keep = match old.status {
             Status::Done | Status::Diverged if old.frames > 0 => {
-                shard::check(&out.join(&old.shard), shape_of(&old)).is_ok()
-                    && out.join(&old.stats).is_file()
+                let shard_path = out.join(&old.shard);
+                match shard::check(&shard_path, shape_of(&old), old.sha256.as_deref()) {
+                    Err(e) => {
+                        let why = match &e {
+                            DataError::Io { source, .. }
+                                if source.kind() == std::io::ErrorKind::NotFound =>
+                            {
+                                format!("its shard {} is missing", shard_path.display())
+                            }
+                            DataError::Digest { .. } => error_chain(&e),
+                            _ => format!("its shard is unreadable: {}", error_chain(&e)),
+                        };
+                        resumed.redone.push((old.id.clone(), why));
+                        false
+                    }
+                    Ok(_) if !out.join(&old.stats).is_file() => {
+                        let stats = out.join(&old.stats);
+                        let why = format!("its statistics {} are missing", stats.display());
+                        resumed.redone.push((old.id.clone(), why));
+                        false
+                    }
+                    Ok(digest) => {
+                        if old.sha256.is_none() {
+                            old.sha256 = Some(digest);
+                            resumed.digests_recorded += 1;
+                        }
+                        true
+                    }
+                }
             }
             // A sequence that diverged on its first frame has no shard: nothing to check.
             Status::Diverged => true,
@@ -474,10 +535,10 @@ fn resume(
         };
         if keep {
             *new = old;
-            kept += 1;
+            resumed.kept += 1;
         }
     }
-    Ok(kept)
+    Ok(resumed)
 }
 
 /// Removes `.NAME.*.tmp` files beside `path` (what `write_atomic` leaves when killed).
@@ -630,6 +691,7 @@ fn run_sequence(
         r.status = Status::Failed;
         r.message = Some(why);
         r.frames = 0;
+        r.sha256 = None;
         Ok(SequenceResult {
             record: r,
             frames: 0,
@@ -700,6 +762,7 @@ fn run_sequence(
     r.vertices = garment.mesh.vertex_count();
     r.faces = garment.mesh.face_count();
     r.frames = t;
+    r.sha256 = None;
     if t > 0 {
         let data = ShardData {
             positions: frames,
@@ -719,7 +782,7 @@ fn run_sequence(
                 .map(|c| c.map(|uv| uv.map(|x| x as f32)))
                 .collect(),
         };
-        shard::write(&out.join(&r.shard), &r.id, &data)?;
+        r.sha256 = Some(shard::write(&out.join(&r.shard), &r.id, &data)?);
     }
     let stats_path = out.join(&r.stats);
     let mut text = serde_json::to_string_pretty(&stats).unwrap_or_else(|_| "null".into());

@@ -87,8 +87,12 @@ pub struct Verification {
     pub frames: usize,
     /// Wall time of loading them all, s.
     pub seconds: f64,
-    /// Shards that failed, with the loader's error.
+    /// Shards that failed, with the loader's error (a changed shard: its SHA-256
+    /// differs from the manifest's).
     pub broken: Vec<(String, String)>,
+    /// Sequences whose manifest records no SHA-256 (written before digests were kept):
+    /// only their header and shapes could be checked.
+    pub unrecorded: Vec<String>,
 }
 
 impl DatasetInfo {
@@ -162,8 +166,9 @@ impl DatasetInfo {
         })
     }
 
-    /// Loads every shard the manifest lists with frames through [`Dataset::load`]
-    /// (header, dtypes, shapes, face indices) and records the result and the time.
+    /// Loads every shard the manifest lists with frames through
+    /// [`Dataset::load_verified`] (SHA-256 against the manifest's, header, dtypes,
+    /// shapes, face indices) and records the result and the time.
     pub fn verify(&mut self, dir: &Path) -> Result<(), DataError> {
         let ds = Dataset::open(dir)?;
         let started = std::time::Instant::now();
@@ -172,9 +177,13 @@ impl DatasetInfo {
             frames: 0,
             seconds: 0.0,
             broken: Vec::new(),
+            unrecorded: Vec::new(),
         };
         for r in ds.records().iter().filter(|r| r.has_frames()) {
-            match ds.load(r) {
+            if r.sha256.is_none() {
+                v.unrecorded.push(r.id.clone());
+            }
+            match ds.load_verified(r) {
                 Ok(s) => {
                     v.loaded += 1;
                     v.frames += s.positions.len();
@@ -287,8 +296,23 @@ impl fmt::Display for DatasetInfo {
                 "verified: {} shards, {} frames loaded in {:.2} s",
                 v.loaded, v.frames, v.seconds
             )?;
+            if !v.unrecorded.is_empty() {
+                writeln!(
+                    f,
+                    "no SHA-256 recorded for {} shards (a manifest from before digests): only their header and shapes were checked; run `weft data generate` again with the dataset's config and `--out {}` to record them",
+                    v.unrecorded.len(),
+                    self.dir
+                )?;
+            }
             for (id, e) in &v.broken {
                 writeln!(f, "broken shard: {id}: {e}")?;
+            }
+            if !v.broken.is_empty() {
+                writeln!(
+                    f,
+                    "to repair: run `weft data generate` again with the dataset's config and `--out {}`; it simulates the broken or changed shards again and keeps the others",
+                    self.dir
+                )?;
             }
         }
         Ok(())

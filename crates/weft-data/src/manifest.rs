@@ -158,6 +158,12 @@ pub struct SequenceRecord {
     pub fps: f64,
     /// Frames stored in the shard (fewer than the range when the simulation diverged).
     pub frames: usize,
+    /// SHA-256 of the shard file as written (64 lowercase hex digits); set for every
+    /// record with a shard. Absent in manifests written before digests were kept: a
+    /// resumed `weft data generate` records it then, and `weft data info --verify`
+    /// says it cannot check those shards' bytes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sha256: Option<String>,
     /// Where it stands.
     pub status: Status,
     /// The first frame that failed, when diverged.
@@ -347,6 +353,22 @@ impl Manifest {
                     "sequence {}: {} frames stored but the range {:?} holds {range}",
                     s.id, s.frames, s.frame_range
                 )));
+            }
+            if let Some(d) = &s.sha256 {
+                if !crate::shard::is_sha256_hex(d) {
+                    return Err(bad(format!(
+                        "sequence {}: sha256 {d:?}; expected 64 lowercase hex digits",
+                        s.id
+                    )));
+                }
+                if !s.has_frames() {
+                    return Err(bad(format!(
+                        "sequence {} has a sha256 but no shard (status {}, {} frames)",
+                        s.id,
+                        s.status.name(),
+                        s.frames
+                    )));
+                }
             }
             if s.status == Status::Done && (s.frames == 0 || s.frames != range) {
                 return Err(bad(format!(

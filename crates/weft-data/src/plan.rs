@@ -85,6 +85,17 @@ pub fn plan(
     body_model: &str,
 ) -> Result<Manifest, DataError> {
     config.validate()?;
+    // Random shapes draw the first `beta_components` of β: more than the model has is
+    // a mistake in the config, not a request to clamp.
+    if config.beta_components > num_betas {
+        return Err(DataError::config(
+            "beta_components",
+            format!(
+                "{}; the body model ({body_model}) has {num_betas} shape components, so expected 0 to {num_betas}",
+                config.beta_components
+            ),
+        ));
+    }
     let mut garments = Vec::new();
     let mut bodies = Vec::new();
     let mut motions = Vec::new();
@@ -130,10 +141,9 @@ pub fn plan(
         // shapes.
         let mut rng =
             SplitMix64::new(derive_seed(config.seed, STREAM_BODY, split_index as u64) ^ PLAN_SALT);
-        let components = config.beta_components.min(num_betas);
         for _ in 0..sc.random_bodies {
             let mut betas = vec![0.0f32; num_betas];
-            for b in betas.iter_mut().take(components) {
+            for b in betas.iter_mut().take(config.beta_components) {
                 *b = truncated_normal(&mut rng, config.beta_sigma, config.beta_limit) as f32;
             }
             shapes.push(betas);
@@ -230,6 +240,7 @@ pub fn plan(
                         material: g.material.clone(),
                         fps: config.fps,
                         frames: 0,
+                        sha256: None,
                         status: Status::Pending,
                         diverged_at: None,
                         message: None,
@@ -351,6 +362,21 @@ mod tests {
         assert!(kinds(Split::Test)
             .iter()
             .any(|k| kinds(Split::Train).contains(k)));
+    }
+
+    #[test]
+    fn more_beta_components_than_the_model_has_are_refused() {
+        let mut c = DataConfig::tiny();
+        c.beta_components = 100;
+        let err = plan(&c, 10, "default body").unwrap_err().to_string();
+        for needle in ["beta_components", "100", "10 shape components", "0 to 10"] {
+            assert!(err.contains(needle), "{needle:?} not in {err}");
+        }
+        // A body model with more components takes more.
+        let m = plan(&c, 300, "my smpl.npz").unwrap();
+        assert!(m.bodies.iter().all(|b| b.betas.len() == 300));
+        c.beta_components = 10;
+        plan(&c, 10, "default body").unwrap();
     }
 
     #[test]

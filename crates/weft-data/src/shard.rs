@@ -17,6 +17,11 @@
 //! dtype and name, and one metadata key serialises one way, so the same data always
 //! gives the same bytes.
 //!
+//! The manifest records each shard's SHA-256 ([`sha256_hex`] of the bytes [`write`]
+//! wrote); [`check`] and [`read_checked`] compare a file against it, so a shard changed
+//! after it was written (a value edited, a bit flipped on disk) is found even when its
+//! header and shapes are intact.
+//!
 //! Why safetensors: Python (numpy, torch) reads it without weft, it is a flat header plus
 //! raw arrays (no pickle, no code), and a half-written file fails the header's length
 //! check, which is what resuming relies on.
@@ -26,6 +31,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use safetensors::tensor::{Dtype, SafeTensors, View};
+use sha2::{Digest, Sha256};
 
 use crate::error::DataError;
 
@@ -177,32 +183,79 @@ pub fn encode(sequence_id: &str, data: &ShardData) -> Result<Vec<u8>, DataError>
     )
 }
 
+/// SHA-256 of `bytes` as 64 lowercase hex digits: the shard digest the manifest records
+/// (`"sha256"` of a sequence record).
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// Whether `text` is what [`sha256_hex`] gives: 64 lowercase hex digits.
+pub fn is_sha256_hex(text: &str) -> bool {
+    text.len() == 64
+        && text
+            .bytes()
+            .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b))
+}
+
 /// Writes a shard atomically (temporary file, then rename): a killed run leaves either
-/// the old file, no file, or a stray temporary file, never a torn shard.
-pub fn write(path: &Path, sequence_id: &str, data: &ShardData) -> Result<(), DataError> {
+/// the old file, no file, or a stray temporary file, never a torn shard. Returns the
+/// SHA-256 of the bytes written ([`sha256_hex`]), for the manifest.
+pub fn write(path: &Path, sequence_id: &str, data: &ShardData) -> Result<String, DataError> {
     let bytes = encode(sequence_id, data)?;
     weft_mesh::io::write_atomic(path, |w| w.write_all(&bytes))
-        .map_err(|e| DataError::io(path, "cannot write the shard", e))
+        .map_err(|e| DataError::io(path, "cannot write the shard", e))?;
+    Ok(sha256_hex(&bytes))
 }
 
 /// Reads a shard and checks every tensor against `expected`; errors name the file, the
-/// tensor and the expected dtype and shape.
+/// tensor and the expected dtype and shape. The bytes are not compared with a digest:
+/// see [`read_checked`].
 pub fn read(path: &Path, expected: ShardShape) -> Result<ShardData, DataError> {
+    read_checked(path, expected, None)
+}
+
+/// [`read`], after checking that the file's SHA-256 is `sha256` (when given; what the
+/// manifest recorded): a changed file is [`DataError::Digest`].
+pub fn read_checked(
+    path: &Path,
+    expected: ShardShape,
+    sha256: Option<&str>,
+) -> Result<ShardData, DataError> {
     let bytes = weft_mesh::io::read_input(path)
         .map_err(|e| DataError::io(path, "cannot read the shard", e))?;
+    check_digest(path, &bytes, sha256)?;
     decode(path, &bytes, expected)
 }
 
-/// Checks a shard's header and tensor shapes without converting the arrays: what a
-/// resumed run does to decide whether a shard is finished.
-pub fn check(path: &Path, expected: ShardShape) -> Result<(), DataError> {
+/// Checks a shard's SHA-256 against `sha256` (when given), then its header and tensor
+/// shapes without converting the arrays: what a resumed run does to decide whether a
+/// shard is finished and unchanged. Returns the file's SHA-256, so a record from before
+/// digests were kept can have it recorded.
+pub fn check(path: &Path, expected: ShardShape, sha256: Option<&str>) -> Result<String, DataError> {
     let bytes = weft_mesh::io::read_input(path)
         .map_err(|e| DataError::io(path, "cannot read the shard", e))?;
+    let found = check_digest(path, &bytes, sha256)?;
     let st = parse(path, &bytes)?;
     for (name, dtype, shape) in layout(expected) {
         tensor(path, &st, name, dtype, &shape)?;
     }
-    Ok(())
+    Ok(found)
+}
+
+/// The SHA-256 of `bytes`, after checking it is `expected` when one is given.
+fn check_digest(path: &Path, bytes: &[u8], expected: Option<&str>) -> Result<String, DataError> {
+    let found = sha256_hex(bytes);
+    match expected {
+        Some(e) if e != found => Err(DataError::Digest {
+            path: path.to_path_buf(),
+            expected: e.to_string(),
+            found,
+        }),
+        _ => Ok(found),
+    }
 }
 
 fn parse<'a>(path: &Path, bytes: &'a [u8]) -> Result<SafeTensors<'a>, DataError> {
@@ -373,6 +426,44 @@ mod tests {
             let err = decode(Path::new("t.safetensors"), &bytes[..cut], d.shape()).unwrap_err();
             assert!(matches!(err, DataError::Shard { .. }), "cut {cut}: {err}");
         }
+    }
+
+    #[test]
+    fn digests_are_of_the_bytes_written_and_catch_a_changed_value() {
+        let dir = std::env::temp_dir().join(format!("weft-shard-digest-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("s.safetensors");
+        let d = sample();
+        let digest = write(&path, "s", &d).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        assert_eq!(digest, sha256_hex(&bytes));
+        assert!(is_sha256_hex(&digest), "{digest}");
+        // The SHA-256 test vector of "abc".
+        assert_eq!(
+            sha256_hex(b"abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+        assert_eq!(check(&path, d.shape(), Some(&digest)).unwrap(), digest);
+        assert_eq!(read_checked(&path, d.shape(), Some(&digest)).unwrap(), d);
+        // One position moved by 0.5 m: same header, same shapes, another digest.
+        let mut moved = d.clone();
+        moved.positions[1][2][0] += 0.5;
+        std::fs::write(&path, encode("s", &moved).unwrap()).unwrap();
+        assert_eq!(read(&path, d.shape()).unwrap(), moved);
+        for err in [
+            check(&path, d.shape(), Some(&digest)).unwrap_err(),
+            read_checked(&path, d.shape(), Some(&digest)).unwrap_err(),
+        ] {
+            assert!(matches!(err, DataError::Digest { .. }), "{err}");
+            let text = err.to_string();
+            assert!(
+                text.contains("s.safetensors") && text.contains(&digest),
+                "{text}"
+            );
+        }
+        // No digest recorded: only the header and shapes are checked.
+        assert!(check(&path, d.shape(), None).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -1,5 +1,7 @@
-//! Generation end to end: determinism, resuming after a kill, `--shard i/n` jobs and
-//! their merge, diverged sequences, split disjointness on the manifest, and the loader.
+//! Generation end to end: determinism, resuming after a kill, shard digests (a changed
+//! shard is found by `--verify` and redone by a resumed run; manifests without digests
+//! still read), `--shard i/n` jobs and their merge, diverged sequences, split
+//! disjointness on the manifest, and the loader.
 //!
 //! The simulator here is a cheap deterministic stand-in (the garment sinks and follows
 //! the root) so these run in well under a second each; the real simulator is exercised
@@ -13,7 +15,8 @@ use std::sync::Mutex;
 use weft_data::manifest::Job;
 use weft_data::{
     generate, merge_directory, DataConfig, DataError, Dataset, DatasetInfo, GarmentSpec,
-    GenerateOptions, MotionSpec, SequenceSimulator, Silent, SimInput, SimOutcome, Split, Status,
+    GenerateOptions, MotionSpec, Progress, SequenceSimulator, Silent, SimInput, SimOutcome, Split,
+    Status,
 };
 
 /// Moves the rest garment by the root translation and sinks it 1 mm per frame; counts
@@ -208,6 +211,170 @@ fn a_killed_run_resumes_and_redoes_only_the_broken_shard() {
     let sim = FakeSim::new();
     run(&c, &dir, &sim, None);
     assert_eq!(sim.calls.load(Ordering::SeqCst), 0);
+}
+
+/// Adds `delta` to the first value of a shard's `positions` tensor in place: the header,
+/// dtypes and shapes stay valid, only the data changes.
+fn nudge_first_position(path: &Path, delta: f32) {
+    let mut bytes = std::fs::read(path).unwrap();
+    let header_len = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + header_len]).unwrap();
+    let start = header["positions"]["data_offsets"][0].as_u64().unwrap() as usize;
+    let at = 8 + header_len + start;
+    let old = f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+    bytes[at..at + 4].copy_from_slice(&(old + delta).to_le_bytes());
+    std::fs::write(path, &bytes).unwrap();
+}
+
+/// A [`Progress`] that keeps the messages.
+#[derive(Default)]
+struct Messages(Mutex<Vec<String>>);
+
+impl Progress for Messages {
+    fn start(&self, _: u64, _: usize, _: usize) {}
+    fn frame(&self) {}
+    fn message(&self, text: &str) {
+        self.0.lock().unwrap().push(text.to_string());
+    }
+    fn finish(&self) {}
+}
+
+#[test]
+fn the_manifest_records_each_shards_sha256() {
+    let c = small_config();
+    let dir = scratch("digest");
+    run(&c, &dir, &FakeSim::new(), None);
+    let ds = Dataset::open(&dir).unwrap();
+    for r in ds.records() {
+        let bytes = std::fs::read(dir.join(&r.shard)).unwrap();
+        let digest = weft_data::shard::sha256_hex(&bytes);
+        assert_eq!(r.sha256.as_deref(), Some(digest.as_str()), "{}", r.id);
+    }
+    let text = std::fs::read_to_string(dir.join("manifest.json")).unwrap();
+    assert_eq!(text.matches("\"sha256\": \"").count(), 6, "{text}");
+}
+
+#[test]
+fn verify_names_a_shard_changed_after_it_was_written() {
+    let c = small_config();
+    let dir = scratch("verify-changed");
+    run(&c, &dir, &FakeSim::new(), None);
+    let mut info = DatasetInfo::of(&dir).unwrap();
+    info.verify(&dir).unwrap();
+    let v = info.verified.as_ref().unwrap();
+    assert_eq!((v.loaded, v.broken.len(), v.unrecorded.len()), (6, 0, 0));
+
+    // One vertex moved by 0.5 m: the shard still has a valid header and shapes.
+    let victim = Dataset::open(&dir).unwrap().records()[2].clone();
+    nudge_first_position(&dir.join(&victim.shard), 0.5);
+    let ds = Dataset::open(&dir).unwrap();
+    assert!(
+        ds.load(&victim).is_ok(),
+        "the plain loader checks shapes only"
+    );
+    let err = ds.load_verified(&victim).unwrap_err();
+    assert!(matches!(err, DataError::Digest { .. }), "{err}");
+
+    let mut info = DatasetInfo::of(&dir).unwrap();
+    info.verify(&dir).unwrap();
+    let v = info.verified.as_ref().unwrap();
+    assert_eq!(v.loaded, 5);
+    assert_eq!(v.broken.len(), 1);
+    let (id, why) = &v.broken[0];
+    assert_eq!(id, &victim.id);
+    assert!(
+        why.contains(&victim.shard) && why.contains("changed since it was written"),
+        "{why}"
+    );
+    let text = info.to_string();
+    assert!(
+        text.contains(&format!("broken shard: {}", victim.id))
+            && text.contains("to repair: run `weft data generate`"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_resumed_run_redoes_a_changed_shard_byte_identically() {
+    let c = small_config();
+    let dir = scratch("resume-changed");
+    run(&c, &dir, &FakeSim::new(), None);
+    let before = files(&dir);
+    let manifest_before = std::fs::read(dir.join("manifest.json")).unwrap();
+    let victim = Dataset::open(&dir).unwrap().records()[4].clone();
+    nudge_first_position(&dir.join(&victim.shard), 0.5);
+    assert_ne!(files(&dir), before);
+
+    let sim = FakeSim::new();
+    let messages = Messages::default();
+    let report = generate(&c, &dir, &GenerateOptions::default(), &sim, &messages).unwrap();
+    assert_eq!(
+        sim.calls.load(Ordering::SeqCst),
+        1,
+        "only the changed shard"
+    );
+    assert_eq!((report.kept, report.done), (5, 1));
+    assert_eq!(report.redone.len(), 1);
+    assert_eq!(report.redone[0].0, victim.id);
+    assert!(
+        report.redone[0].1.contains("changed since it was written"),
+        "{:?}",
+        report.redone
+    );
+    let said = messages.0.lock().unwrap().join("\n");
+    assert!(
+        said.contains(&victim.id) && said.contains("simulating it again"),
+        "{said}"
+    );
+    assert_eq!(files(&dir), before);
+    assert_eq!(
+        std::fs::read(dir.join("manifest.json")).unwrap(),
+        manifest_before
+    );
+    let mut info = DatasetInfo::of(&dir).unwrap();
+    info.verify(&dir).unwrap();
+    assert!(info.verified.unwrap().broken.is_empty());
+}
+
+#[test]
+fn a_manifest_without_digests_still_reads_and_resume_records_them() {
+    let c = small_config();
+    let dir = scratch("old-manifest");
+    run(&c, &dir, &FakeSim::new(), None);
+    let manifest_path = dir.join("manifest.json");
+    let current = std::fs::read(&manifest_path).unwrap();
+    // The manifest as weft wrote it before shard digests.
+    let mut old: serde_json::Value = serde_json::from_slice(&current).unwrap();
+    for s in old["sequences"].as_array_mut().unwrap() {
+        s.as_object_mut().unwrap().remove("sha256").unwrap();
+    }
+    let mut text = serde_json::to_string_pretty(&old).unwrap();
+    text.push('\n');
+    assert!(!text.contains("sha256"));
+    std::fs::write(&manifest_path, &text).unwrap();
+
+    let ds = Dataset::open(&dir).unwrap();
+    assert!(ds.records().iter().all(|r| r.sha256.is_none()));
+    let r = ds.records_in(Split::Train)[0].clone();
+    assert_eq!(ds.load_verified(&r).unwrap(), ds.load(&r).unwrap());
+    let mut info = DatasetInfo::of(&dir).unwrap();
+    info.verify(&dir).unwrap();
+    let v = info.verified.as_ref().unwrap();
+    assert_eq!((v.loaded, v.broken.len(), v.unrecorded.len()), (6, 0, 6));
+    let shown = info.to_string();
+    assert!(
+        shown.contains("no SHA-256 recorded for 6 shards") && shown.contains("weft data generate"),
+        "{shown}"
+    );
+
+    // A resumed run keeps every shard, simulates nothing and records the digests: the
+    // manifest is the one a fresh run writes.
+    let sim = FakeSim::new();
+    let report = generate(&c, &dir, &GenerateOptions::default(), &sim, &Silent).unwrap();
+    assert_eq!(sim.calls.load(Ordering::SeqCst), 0);
+    assert_eq!((report.kept, report.digests_recorded), (6, 6));
+    assert!(report.redone.is_empty());
+    assert_eq!(std::fs::read(&manifest_path).unwrap(), current);
 }
 
 #[test]

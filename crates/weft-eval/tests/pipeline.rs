@@ -78,6 +78,7 @@ fn record(c: &Case, frames: usize) -> SequenceRecord {
         material: "cotton".into(),
         fps: 30.0,
         frames,
+        sha256: None,
         status: weft_data::Status::Done,
         diverged_at: None,
         message: None,

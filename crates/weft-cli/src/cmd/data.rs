@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use weft_data::progress::FrameBar;
-use weft_data::{generate, DataConfig, DatasetInfo, GenerateOptions, Job, Physics};
+use weft_data::{generate, DataConfig, DataError, DatasetInfo, GenerateOptions, Job, Physics};
 
 use super::emit;
 
@@ -74,8 +74,17 @@ pub fn run(command: DataCommand) -> Result<()> {
 }
 
 fn run_generate(a: &GenerateArgs) -> Result<()> {
+    // A bad config value (weft-data names its key) also names the file it came from.
+    let in_config_file = |e: DataError| -> anyhow::Error {
+        match (&a.config, &e) {
+            (Some(path), DataError::Config { .. }) => {
+                anyhow::Error::new(e).context(path.display().to_string())
+            }
+            _ => e.into(),
+        }
+    };
     let mut config = match (&a.config, &a.preset) {
-        (Some(path), _) => DataConfig::load(path)?,
+        (Some(path), _) => DataConfig::load(path).map_err(in_config_file)?,
         (None, Some(name)) => DataConfig::preset(name)?,
         (None, None) => DataConfig::tiny(),
     };
@@ -91,6 +100,7 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
     let job = a.shard.as_deref().map(Job::parse).transpose()?;
     let bar = FrameBar::new();
     let report = generate(&config, out, &GenerateOptions { job }, &Physics, &bar)
+        .map_err(in_config_file)
         .with_context(|| format!("generating the dataset in {}", out.display()))?;
     let mut text = format!(
         "{}: {} sequences in this job, {} kept from an earlier run, {} simulated ({} frames in {:.1} s)",
@@ -130,9 +140,15 @@ fn run_info(a: &InfoArgs) -> Result<()> {
     }
     match &info.verified {
         Some(v) if !v.broken.is_empty() => bail!(
-            "{} of {} shards are broken",
+            "{} of {} shards are broken or changed since they were written ({}); run `weft data generate` again with the dataset's config and `--out {}` to simulate them again",
             v.broken.len(),
-            v.broken.len() + v.loaded
+            v.broken.len() + v.loaded,
+            v.broken
+                .iter()
+                .map(|(id, _)| weft_data::manifest::shard_path(id))
+                .collect::<Vec<_>>()
+                .join(", "),
+            a.dir.display()
         ),
         _ => Ok(()),
     }

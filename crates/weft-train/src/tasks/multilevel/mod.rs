@@ -335,6 +335,7 @@ pub fn carried_sequence(
         material: String::new(),
         fps,
         frames,
+        sha256: None,
         status: weft_data::Status::Done,
         diverged_at: None,
         message: None,
