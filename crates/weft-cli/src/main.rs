@@ -3,7 +3,7 @@
 
 mod cmd;
 
-use clap::Parser;
+use clap::{error::ErrorKind, Arg, ArgAction, Command, CommandFactory, FromArgMatches, Parser};
 use std::process::ExitCode;
 
 /// weft — graph neural networks for garment deformation, from meshes to animation.
@@ -15,7 +15,26 @@ struct Cli {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match parse() {
+        Ok(cli) => cli,
+        Err(err)
+            if matches!(
+                err.kind(),
+                ErrorKind::DisplayHelp | ErrorKind::DisplayVersion
+            ) =>
+        {
+            err.exit()
+        }
+        Err(err) => {
+            // clap's message is its first line (`error: …`, naming the argument); the
+            // usage block after it is replaced by a pointer to --help, so every error
+            // of weft is one line.
+            let text = err.to_string();
+            let first = text.lines().next().unwrap_or("error: invalid arguments");
+            eprintln!("{first} (see `--help`)");
+            return ExitCode::from(2);
+        }
+    };
     match cmd::run(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
@@ -24,4 +43,25 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Parses the command line with negative numbers accepted as option values everywhere
+/// (`--betas -1,2`, `--frames -5`): the option's own parser then accepts the value or
+/// refuses it naming the option, instead of clap reporting an "unexpected argument
+/// '-5'" that names none.
+fn parse() -> Result<Cli, clap::Error> {
+    let command = negative_values(Cli::command());
+    Cli::from_arg_matches(&command.try_get_matches()?)
+}
+
+fn negative_values(command: Command) -> Command {
+    command
+        .mut_args(|arg: Arg| {
+            if matches!(arg.get_action(), ArgAction::Set | ArgAction::Append) {
+                arg.allow_negative_numbers(true)
+            } else {
+                arg
+            }
+        })
+        .mut_subcommands(negative_values)
 }

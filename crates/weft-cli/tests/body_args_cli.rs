@@ -100,3 +100,116 @@ fn too_many_betas_name_the_flag_and_the_limit() {
         assert!(!out.exists() && !motion_out.exists());
     }
 }
+
+/// Issue 17 item 6: β beyond ±5 (a 3.9 m body at 100, vertices at 1e306 m for 1e308)
+/// is refused naming the flag and the way out; `--allow-extreme-shapes` takes it.
+#[test]
+fn extreme_betas_are_refused_unless_allowed() {
+    let dir = scratch("extreme");
+    let out = dir.join("never.obj");
+    for (betas, flag) in [
+        ("100", "--betas"),
+        ("0,1e308", "--betas"),
+        ("-6", "--betas"),
+    ] {
+        let o = weft(&["body", "export", flag, betas, "--out", s(&out)]);
+        assert_eq!(o.status.code(), Some(1), "{betas}: {}", stderr(&o));
+        let e = stderr(&o);
+        assert!(
+            e.contains("--betas: β")
+                && e.contains("outside ±5")
+                && e.contains("--allow-extreme-shapes"),
+            "{e}"
+        );
+        assert_eq!(e.lines().count(), 1, "{e}");
+        assert!(!out.exists());
+    }
+    let o = weft(&[
+        "garment",
+        "resize",
+        "--garment",
+        s(&out),
+        "--to-betas",
+        "0,7",
+        "--out",
+        s(&out),
+    ]);
+    assert!(
+        stderr(&o).contains("--to-betas: β2 = 7 is outside ±5"),
+        "{}",
+        stderr(&o)
+    );
+    let o = weft(&[
+        "body",
+        "export",
+        "--betas",
+        "6",
+        "--allow-extreme-shapes",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.is_file());
+}
+
+/// Issue 17 item 13: a negative number given to an option that takes none is refused
+/// naming the option (clap said "unexpected argument '-5' found"), in one line.
+#[test]
+fn negative_numbers_name_their_option() {
+    let dir = scratch("negative_flags");
+    let out = dir.join("never.npz");
+    let cases: [(Vec<&str>, &str); 3] = [
+        (
+            vec![
+                "motion",
+                "generate",
+                "--kind",
+                "walk",
+                "--frames",
+                "-5",
+                "--out",
+                s(&out),
+            ],
+            "--frames",
+        ),
+        (
+            vec![
+                "garment",
+                "generate",
+                "--kind",
+                "skirt",
+                "--vertices",
+                "-100",
+                "--out",
+                s(&out),
+            ],
+            "--vertices",
+        ),
+        (
+            vec![
+                "simulate",
+                "--garment",
+                s(&out),
+                "--motion",
+                "walk",
+                "--substeps",
+                "-1",
+                "--out",
+                s(&out),
+            ],
+            "--substeps",
+        ),
+    ];
+    for (args, flag) in cases {
+        let o = weft(&args);
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(
+            e.starts_with("error: ") && e.contains(flag),
+            "{args:?}: {e}"
+        );
+        assert!(!e.contains("unexpected argument"), "{args:?}: {e}");
+        assert_eq!(e.trim_end().lines().count(), 1, "{args:?}: {e}");
+        assert!(!out.exists());
+    }
+}

@@ -243,13 +243,19 @@ fn bad_input_is_one_line_and_leaves_nothing() {
         "frame rate 0 is not a positive",
     );
 
-    // Unwritable outputs: a missing directory, a path under a file.
+    // Missing parent directories are created (issue 17 item 12).
     let o = run(&npy, "glb", &dir.join("no/such/dir/a.glb"), "30");
-    assert_one_line_error(&o, "cannot write ");
-    assert_eq!(stderr(&o).matches("os error").count(), 1, "{}", stderr(&o));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.join("no/such/dir/a.glb").is_file());
+    let o = run(&npy, "obj", &dir.join("new/parent/seq"), "30");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.join("new/parent/seq/frame_00000.obj").is_file());
+
+    // Unwritable outputs: a path under a file.
     let o = run(&npy, "mdd", &template.join("a.mdd"), "30");
     assert_one_line_error(&o, "cannot write ");
-    let o = run(&npy, "obj", &dir.join("no/such/seq"), "30");
+    assert_eq!(stderr(&o).matches("os error").count(), 1, "{}", stderr(&o));
+    let o = run(&npy, "obj", &template.join("seq"), "30");
     assert_one_line_error(&o, "cannot write ");
 
     // An OBJ sequence never replaces a directory of other files.

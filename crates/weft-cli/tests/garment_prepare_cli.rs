@@ -223,3 +223,39 @@ fn bad_input_is_one_line_of_error() {
     assert!(e.contains("missing.obj"), "{e}");
     assert!(!Path::new(&out).exists());
 }
+
+/// Issue 17 item 12: when the weights cannot be written, no prepared mesh is left.
+#[test]
+fn prepare_writes_nothing_when_the_weights_fail() {
+    let d = scratch("prepare_all_or_nothing");
+    let g = file(&d, "g.obj");
+    ok(&[
+        "garment",
+        "generate",
+        "--kind",
+        "skirt",
+        "--vertices",
+        "300",
+        "--out",
+        &g,
+    ]);
+    let out = file(&d, "prepared.obj");
+    let report = file(&d, "report.json");
+    // The weights' parent is a file: the write fails after the mesh is computed.
+    let e = fails(&[
+        "garment",
+        "prepare",
+        "--garment",
+        &g,
+        "--no-drape",
+        "--out",
+        &out,
+        "--report",
+        &report,
+        "--weights",
+        &format!("{g}/w.npy"),
+    ]);
+    assert!(e.contains("w.npy"), "{e}");
+    assert!(!Path::new(&out).exists(), "a mesh without its weights");
+    assert!(!Path::new(&report).exists());
+}

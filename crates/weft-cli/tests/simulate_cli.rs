@@ -158,3 +158,60 @@ fn bad_input_is_one_clear_error() {
     );
     assert_eq!(e.lines().count(), 1, "{e}");
 }
+
+/// Issue 17 items 6, 8 and 12: a failed run leaves no directory; a warm-up past the
+/// bound and a garment a kilometre away are refused before any work; a run without
+/// `--obj` into an earlier run's directory removes its stale `obj/`; missing parents of
+/// `--out` are created.
+#[test]
+fn outputs_are_all_or_nothing_and_bounds_hold() {
+    let dir = scratch("hygiene");
+    let g = skirt(&dir);
+    let out = dir.join("a/b/out");
+    let run = |garment: &Path, extra: &[&str]| {
+        let mut a = vec!["simulate", "--garment", s(garment), "--motion", "walk"];
+        a.extend_from_slice(&["--frames", "2", "--out", s(&out)]);
+        a.extend_from_slice(extra);
+        weft(&a)
+    };
+    let o = run(&g, &["--warmup", "1000000000"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("at most 10000"), "{}", stderr(&o));
+    assert!(!dir.join("a").exists(), "a failed run left a directory");
+
+    let text = std::fs::read_to_string(&g).expect("obj");
+    let far: String = text
+        .lines()
+        .map(|l| match l.strip_prefix("v ") {
+            Some(rest) => {
+                let c: Vec<f64> = rest
+                    .split_whitespace()
+                    .map(|x| x.parse().unwrap())
+                    .collect();
+                format!("v {} {} {}\n", c[0] + 1000.0, c[1], c[2])
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    let far_path = dir.join("far.obj");
+    std::fs::write(&far_path, far).expect("write");
+    let o = run(&far_path, &[]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("m from the body") && e.lines().count() == 1,
+        "{e}"
+    );
+    assert!(!dir.join("a").exists(), "a failed run left a directory");
+
+    let o = run(&g, &["--obj"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("obj/frame_00000.obj").is_file());
+    let o = run(&g, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        !out.join("obj").exists(),
+        "stale obj/ left beside new frames"
+    );
+    assert!(stderr(&o).contains("removed"), "{}", stderr(&o));
+}

@@ -71,7 +71,6 @@ impl MotionSpec {
                     })?;
                 let options = MotionFileOptions {
                     rest_joints,
-                    npz_source_pelvis: rest_joints[0],
                     ..MotionFileOptions::default()
                 };
                 let (m, _) = read_motion(path, &options)

@@ -403,6 +403,7 @@ mod tests {
         BodyArgs {
             model: BodyModelArg { body: None },
             betas: betas.to_vec(),
+            limit: Default::default(),
         }
     }
 

@@ -1,11 +1,11 @@
 //! `--body` and `--betas`: the one argument type of every command that takes a body, so
 //! that each loads the model, names it and checks β the same way.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 use weft_body::default_body::DEFAULT_BODY_NAME;
-use weft_body::BodyModel;
+use weft_body::{BodyModel, BETA_LIMIT};
 
 /// `--body`: the body model alone, for commands that take no shape (or name theirs
 /// differently, as `garment resize` does).
@@ -44,6 +44,19 @@ pub struct BodyArgs {
         allow_hyphen_values = true
     )]
     pub betas: Vec<f64>,
+    #[command(flatten)]
+    pub limit: ShapeLimit,
+}
+
+/// `--allow-extreme-shapes`: lifts the ±[`BETA_LIMIT`] bound on β for whoever needs
+/// bodies outside the scanned population (stress tests, stylised characters).
+#[derive(Args, Clone, Copy, Default)]
+pub struct ShapeLimit {
+    /// Accept shape coefficients beyond ±5 (β are standard deviations of the body
+    /// population; past 5 the body is no longer human-like). Non-finite values are
+    /// always refused.
+    #[arg(long)]
+    pub allow_extreme_shapes: bool,
 }
 
 impl BodyArgs {
@@ -54,12 +67,22 @@ impl BodyArgs {
 
     /// `--betas` as the model's shape vector (see [`shape`]).
     pub fn betas(&self, model: &BodyModel) -> Result<Vec<f64>> {
-        shape(model, &self.betas, "betas")
+        shape(model, &self.betas, "betas", self.limit)
     }
 }
 
 /// The β given with `--flag`, padded with zeros to the model's count; more values than
-/// the model has are refused, naming the flag and the limit.
-pub fn shape(model: &BodyModel, given: &[f64], flag: &str) -> Result<Vec<f64>> {
-    model.betas(given).with_context(|| format!("--{flag}"))
+/// the model has, and (unless `limit` lifts it) any beyond ±[`BETA_LIMIT`], are refused,
+/// naming the flag and the limit.
+pub fn shape(model: &BodyModel, given: &[f64], flag: &str, limit: ShapeLimit) -> Result<Vec<f64>> {
+    let betas = model.betas(given).with_context(|| format!("--{flag}"))?;
+    if !limit.allow_extreme_shapes {
+        if let Some((i, b)) = betas.iter().enumerate().find(|(_, b)| b.abs() > BETA_LIMIT) {
+            bail!(
+                "--{flag}: β{} = {b} is outside ±{BETA_LIMIT} (β are standard deviations of the body population; past {BETA_LIMIT} the body is no longer human-like); pass --allow-extreme-shapes to use it anyway",
+                i + 1
+            );
+        }
+    }
+    Ok(betas)
 }

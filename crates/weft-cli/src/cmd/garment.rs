@@ -15,7 +15,7 @@ use weft_garment::prepare::{
 use weft_garment::{DressTop, FitBody, GarmentKind, SkirtLength, Style};
 use weft_mesh::{Topology, TriMesh};
 
-use super::body_args::{shape, BodyArgs, BodyModelArg};
+use super::body_args::{shape, BodyArgs, BodyModelArg, ShapeLimit};
 use super::emit;
 
 #[derive(Subcommand)]
@@ -68,6 +68,8 @@ pub struct GarmentOnBody {
     garment: PathBuf,
     #[command(flatten)]
     body: BodyModelArg,
+    #[command(flatten)]
+    limit: ShapeLimit,
 }
 
 /// Drape parameters shared by `drape` and `prepare`.
@@ -363,8 +365,8 @@ fn resize_line(r: &ResizeReport) -> String {
 
 fn run_resize(a: &ResizeArgs) -> Result<()> {
     let (model, name) = a.garment.body.load()?;
-    let from = shape(&model, &a.from_betas, "from-betas")?;
-    let to = shape(&model, &a.to_betas, "to-betas")?;
+    let from = shape(&model, &a.from_betas, "from-betas", a.garment.limit)?;
+    let to = shape(&model, &a.to_betas, "to-betas", a.garment.limit)?;
     let g = read_garment(&a.garment.garment)?;
     let r = resize(
         &g.mesh,
@@ -379,7 +381,7 @@ fn run_resize(a: &ResizeArgs) -> Result<()> {
 
 fn run_drape(a: &DrapeArgs) -> Result<()> {
     let (model, name) = a.garment.body.load()?;
-    let betas = shape(&model, &a.betas, "betas")?;
+    let betas = shape(&model, &a.betas, "betas", a.garment.limit)?;
     let (options, material) = drape_options(&a.drape)?;
     let g = read_garment(&a.garment.garment)?;
     let r = drape(
@@ -395,8 +397,8 @@ fn run_drape(a: &DrapeArgs) -> Result<()> {
 
 fn run_prepare(a: &PrepareArgs) -> Result<()> {
     let (model, name) = a.garment.body.load()?;
-    let from = shape(&model, &a.from_betas, "from-betas")?;
-    let to = shape(&model, &a.betas, "betas")?;
+    let from = shape(&model, &a.from_betas, "from-betas", a.garment.limit)?;
+    let to = shape(&model, &a.betas, "betas", a.garment.limit)?;
     let (options, material) = drape_options(&a.drape)?;
     let g = read_garment(&a.garment.garment)?;
     let body = fit_body(&model, &to, &name)?;
@@ -420,19 +422,36 @@ fn run_prepare(a: &PrepareArgs) -> Result<()> {
         report.insert("drape".into(), drape_json(&r));
         mesh.positions = r.positions;
     }
-    write_garment(&a.garment.garment, &g, &mesh.positions, &a.out)?;
-    lines.push(format!("wrote {}", a.out.display()));
-    if let Some(path) = &a.weights {
-        let w = body.weights_at(&model, &mesh.positions)?;
-        let shape = [w.vertex_count(), w.joint_count()];
-        weft_mesh::export::npy::write_npy(path, &shape, &w.to_f32())?;
-        lines.push(format!(
-            "wrote {}: skinning weights, {} vertices × {} joints",
-            path.display(),
-            shape[0],
-            shape[1]
-        ));
+    let weights = match &a.weights {
+        Some(path) => Some((path, body.weights_at(&model, &mesh.positions)?)),
+        None => None,
+    };
+    // The mesh is written last and the earlier files removed if a later one fails, so
+    // a failed run never leaves a prepared mesh without the weights asked for with it.
+    let mut written: Vec<&Path> = Vec::new();
+    let result = (|| {
+        if let Some((path, w)) = &weights {
+            let shape = [w.vertex_count(), w.joint_count()];
+            weft_mesh::export::npy::write_npy(path, &shape, &w.to_f32())?;
+            written.push(path);
+            lines.push(format!(
+                "wrote {}: skinning weights, {} vertices × {} joints",
+                path.display(),
+                shape[0],
+                shape[1]
+            ));
+        }
+        write_report(a.report.as_deref(), &serde_json::Value::Object(report))?;
+        written.extend(a.report.as_deref());
+        write_garment(&a.garment.garment, &g, &mesh.positions, &a.out)?;
+        lines.push(format!("wrote {}", a.out.display()));
+        anyhow::Ok(())
+    })();
+    if let Err(e) = result {
+        for path in written {
+            let _ = std::fs::remove_file(path);
+        }
+        return Err(e);
     }
-    write_report(a.report.as_deref(), &serde_json::Value::Object(report))?;
     emit(&lines.join("\n"))
 }

@@ -8,12 +8,12 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use weft_body::BodyModel;
-use weft_mesh::export::{write_obj_sequence, write_pc2, Frames, Pc2Timing};
+use weft_mesh::export::{remove_obj_sequence, write_obj_sequence, write_pc2, Frames, Pc2Timing};
 use weft_mesh::io::{load_mesh, write_atomic};
 use weft_motion::{generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams};
 use weft_sim::{
     simulate_sequence, Attachment, FrameStats, Material, SequenceError, SequenceOptions,
-    SimulatedSequence,
+    SequenceProgress, SimulatedSequence,
 };
 
 use super::body_args::BodyArgs;
@@ -97,8 +97,14 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     if let Some(w) = args.warmup {
         opts.warmup_frames = w;
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating the output directory {}", args.out.display()))?;
+    // The directory is made when there is something to write (a failed run leaves
+    // nothing behind); a path that cannot be one is refused before the simulation.
+    if args.out.exists() && !args.out.is_dir() {
+        bail!(
+            "--out {}: exists and is not a directory; expected a directory for frames.pc2, frames.npy and stats.json",
+            args.out.display()
+        );
+    }
 
     let total = args
         .frames
@@ -119,13 +125,18 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         &betas,
         &motion,
         &opts,
-        &mut |s: &FrameStats| {
-            bar.set_message(format!(
-                "strain {:.2}% (max {:.1}%)",
-                100.0 * s.mean_edge_strain,
-                100.0 * s.max_edge_strain
-            ));
-            bar.inc(1);
+        &mut |p| match p {
+            SequenceProgress::Warmup { done, total } => {
+                bar.set_message(format!("warming up {done}/{total}"));
+            }
+            SequenceProgress::Frame(s) => {
+                bar.set_message(format!(
+                    "strain {:.2}% (max {:.1}%)",
+                    100.0 * s.mean_edge_strain,
+                    100.0 * s.max_edge_strain
+                ));
+                bar.inc(1);
+            }
         },
     );
     bar.finish_and_clear();
@@ -242,12 +253,19 @@ fn write_outputs(
 ) -> Result<()> {
     let frames = Frames::from_frames(&seq.frames)?;
     let out = &args.out;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("creating the output directory {}", out.display()))?;
     write_pc2(&out.join("frames.pc2"), &frames, Pc2Timing::default())?;
     frames
         .write_npy(&out.join("frames.npy"))
         .with_context(|| format!("writing {}", out.join("frames.npy").display()))?;
     if args.obj {
         write_obj_sequence(&out.join("obj"), faces, &frames)?;
+    } else if remove_obj_sequence(&out.join("obj"))? {
+        eprintln!(
+            "removed {}: the OBJ sequence of an earlier run (this one wrote none; --obj writes one)",
+            out.join("obj").display()
+        );
     }
     let stats = json!({
         "garment": info.garment.display().to_string(),
