@@ -92,7 +92,10 @@ pub(crate) enum Dtype {
 impl Dtype {
     /// The dtype of a `descr`; big-endian and non-numeric types are refused with a hint.
     pub(crate) fn parse(descr: &str) -> Result<Self, String> {
-        let (order, code) = descr.split_at(descr.len().min(1));
+        // The byte order is one ASCII character; split after the first character, not
+        // the first byte, so a multi-byte first character is refused, not a panic.
+        let first = descr.chars().next().map_or(0, char::len_utf8);
+        let (order, code) = descr.split_at(first);
         if order == ">" && !matches!(code, "i1" | "u1" | "b1") {
             return Err(format!(
                 "dtype '{descr}' is big-endian; expected little-endian data (in NumPy: a.astype(a.dtype.newbyteorder('<')))"
@@ -559,6 +562,24 @@ impl fmt::Display for ShapeDisplay<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Found by fuzzing (docs/fuzzing.md): a `descr` starting with a multi-byte character
+    /// (`'Ǌ4'`) made the byte-order split panic outside a character boundary.
+    #[test]
+    fn a_multibyte_descr_is_refused() {
+        let bytes = include_bytes!("../../tests/fuzz_regressions/npy_multibyte_descr.npy");
+        let e = read_header(&mut &bytes[..], Some(bytes.len() as u64)).unwrap_err();
+        let ReadError::Invalid(message) = e else {
+            panic!("{e:?}");
+        };
+        assert!(
+            message.contains("dtype 'Ǌ4' is not a numeric dtype"),
+            "{message}"
+        );
+        for descr in ["é", "Ǌ", "<é", "\u{10FFFF}f4", ""] {
+            assert!(Dtype::parse(descr).is_err(), "{descr}");
+        }
+    }
 
     /// A v1.0 preamble and `dict` as the header, followed by `data`.
     fn file(dict: &str, data: &[u8]) -> Vec<u8> {

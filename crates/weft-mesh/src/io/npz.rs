@@ -45,7 +45,7 @@ pub const MAX_MEMBER_BYTES: u64 = 8 << 30;
 
 /// The most a deflated stream can expand (deflate's limit is about 1032:1): a member
 /// claiming more per compressed byte is damaged, and is refused before it is read.
-const MAX_DEFLATE_RATIO: u64 = 1032;
+pub const MAX_DEFLATE_RATIO: u64 = 1032;
 
 /// What went wrong reading or writing a `.npz` file.
 #[derive(Debug, thiserror::Error)]
