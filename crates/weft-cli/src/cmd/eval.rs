@@ -36,9 +36,9 @@ pub struct EvalArgs {
     /// data and split, instead of evaluating again.
     #[arg(long)]
     reuse: bool,
-    /// Evaluate only the first N sequences of the split.
+    /// Evaluate only the first N sequences of the split (N ≥ 1).
     #[arg(long, value_name = "N")]
-    max_sequences: Option<usize>,
+    max_sequences: Option<std::num::NonZeroUsize>,
     /// Skip the garment–body collision check (one distance query per vertex and frame).
     #[arg(long)]
     no_collisions: bool,
@@ -111,7 +111,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     }
     let opts = EvalOptions {
         split: args.split,
-        max_sequences: args.max_sequences,
+        max_sequences: args.max_sequences.map(usize::from),
         collisions: !args.no_collisions,
         fps_batches: if args.no_timing { vec![] } else { vec![1, 16] },
         command: command_line(),
