@@ -405,15 +405,9 @@ impl RunDir {
             });
         }
         let model_path = self.layout.model_record(&stem);
-        let record = ModuleRecord::from_bytes(Bytes::from_bytes_vec(read_file(&model_path)?))
-            .map_err(|e| record_err(&model_path, e))?;
-        let model = fresh
-            .try_load_record(record)
-            .map_err(|e| record_err(&model_path, e))?;
+        let model = load_model_record(fresh, read_file(&model_path)?, &model_path)?;
         let optim_path = self.layout.optimizer_record(&stem);
-        let optim = optim
-            .from_bytes(Bytes::from_bytes_vec(read_file(&optim_path)?))
-            .map_err(|e| record_err(&optim_path, e))?;
+        let optim = load_optimizer_record(optim, read_file(&optim_path)?, &optim_path)?;
         Ok((model, optim, state))
     }
 
@@ -423,6 +417,47 @@ impl RunDir {
             what: "model config".into(),
             source: Box::new(e),
         })
+    }
+}
+
+/// `fresh` with the parameters of the model record `bytes` (a checkpoint's `.bpk`, read
+/// from `path`, which errors name).
+pub fn load_model_record<M: Module>(fresh: M, bytes: Vec<u8>, path: &Path) -> Result<M> {
+    let record =
+        ModuleRecord::from_bytes(Bytes::from_bytes_vec(bytes)).map_err(|e| record_err(path, e))?;
+    fresh
+        .try_load_record(record)
+        .map_err(|e| record_err(path, e))
+}
+
+/// `optim` with the state of the optimiser record `bytes` (a checkpoint's `.optim.bpk`,
+/// read from `path`, which errors name).
+///
+/// burn 0.22.1 panics on some damaged optimiser records instead of returning an error (a
+/// state tensor without a parameter id, an unsupported rank; found by fuzzing, see
+/// docs/fuzzing.md); such a panic is caught here and reported as a damaged record.
+pub fn load_optimizer_record(
+    optim: ModuleOptimizer,
+    bytes: Vec<u8>,
+    path: &Path,
+) -> Result<ModuleOptimizer> {
+    let bytes = Bytes::from_bytes_vec(bytes);
+    let loaded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| optim.from_bytes(bytes)));
+    match loaded {
+        Ok(r) => r.map_err(|e| record_err(path, e)),
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "burn panicked".into());
+            Err(record_err(
+                path,
+                burn::store::RecordError::Validation(format!(
+                    "the optimiser record is damaged ({what})"
+                )),
+            ))
+        }
     }
 }
 

@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use burn::module::Module;
-use burn::tensor::Device;
+use burn::store::ModuleRecord;
+use burn::tensor::{Bytes, Device};
 use weft_body::BodyModel;
 use weft_mesh::TriMesh;
 
@@ -96,15 +97,26 @@ impl Predictor {
         device: &Device,
     ) -> Result<Self, ModelError> {
         let fresh = Multilevel::new(&config, device)?;
-        let model = fresh.try_load_file(checkpoint).map_err(|e| {
-            run_err(
-                checkpoint,
-                format!(
-                    "does not fit the model of preset {:?} in config.toml: {e}",
-                    config.preset
-                ),
-            )
-        })?;
+        // Read as bytes (bounded by the file) rather than with `Module::try_load_file`:
+        // burn's file reader allocates the metadata size the header claims (up to 100 MiB)
+        // before reading it, whatever the file's length; its bytes reader first checks the
+        // claim against the bytes present (found by fuzzing, docs/fuzzing.md).
+        let bytes =
+            weft_mesh::io::read_input(checkpoint).map_err(|source| ModelError::RunRead {
+                path: checkpoint.to_path_buf(),
+                source,
+            })?;
+        let model = ModuleRecord::from_bytes(Bytes::from_bytes_vec(bytes))
+            .and_then(|record| fresh.try_load_record(record))
+            .map_err(|e| {
+                run_err(
+                    checkpoint,
+                    format!(
+                        "does not fit the model of preset {:?} in config.toml: {e}",
+                        config.preset
+                    ),
+                )
+            })?;
         Ok(Predictor {
             model,
             config,

@@ -74,15 +74,21 @@ impl<const D: usize> RecordState for AdamaxState<D> {
         out.push_tensor(prefix, "inf_norm", self.inf_norm.to_data());
     }
 
+    /// `None` (the parameter's state starts afresh, as burn does for a state it cannot
+    /// rebuild) when a leaf is missing or damaged: not of rank `D`, not floating point, or
+    /// the two moments of different shapes. `Tensor::from_data` would panic on those.
     fn state_unflatten(prefix: &str, src: &mut StateSource, device: &Device) -> Option<Self> {
         let time = u64::try_from(src.take_scalar(prefix, "time")?).ok()? as usize;
         // Keep the stored precision (an f64 parameter has an f64 state).
         let load = |data: burn::tensor::TensorData| {
             let dtype = data.dtype();
-            Tensor::from_data(data, (device, dtype))
+            (data.rank() == D && dtype.is_float()).then(|| Tensor::from_data(data, (device, dtype)))
         };
-        let moment = load(src.take_tensor(prefix, "moment")?);
-        let inf_norm = load(src.take_tensor(prefix, "inf_norm")?);
+        let moment: Tensor<D> = load(src.take_tensor(prefix, "moment")?)?;
+        let inf_norm: Tensor<D> = load(src.take_tensor(prefix, "inf_norm")?)?;
+        if moment.dims() != inf_norm.dims() {
+            return None;
+        }
         Some(AdamaxState {
             time,
             moment,
@@ -192,6 +198,32 @@ mod tests {
         back.moment
             .into_data()
             .assert_eq(&s.moment.into_data(), true);
+    }
+
+    /// A damaged record (a moment of another rank, an integer moment, moments of two
+    /// shapes) rebuilds no state instead of panicking in `Tensor::from_data` (found by
+    /// fuzzing checkpoints, docs/fuzzing.md).
+    #[test]
+    fn damaged_states_are_not_rebuilt() {
+        let source = |moment: TensorData, inf_norm: TensorData| {
+            let mut src = StateSource::new([("p.time".to_string(), 3u64.into())].into());
+            src.insert_tensor("p.moment".into(), moment);
+            src.insert_tensor("p.inf_norm".into(), inf_norm);
+            src
+        };
+        let good = || TensorData::new(vec![1.0f32, 2.0], [2]);
+        let mut src = source(good(), good());
+        assert!(AdamaxState::<1>::state_unflatten("p", &mut src, &cpu()).is_some());
+        for (moment, inf_norm) in [
+            (TensorData::new(vec![1.0f32, 2.0], [1, 2]), good()),
+            (good(), TensorData::new(vec![1.0f32, 2.0], [1, 2])),
+            (TensorData::new(vec![1i32, 2], [2]), good()),
+            (good(), TensorData::new(vec![true, false], [2])),
+            (good(), TensorData::new(vec![1.0f32, 2.0, 3.0], [3])),
+        ] {
+            let mut src = source(moment, inf_norm);
+            assert!(AdamaxState::<1>::state_unflatten("p", &mut src, &cpu()).is_none());
+        }
     }
 
     /// On a module, the first step moves every parameter by `−lr · sign(g)`.
