@@ -70,7 +70,9 @@ fn every_command_refuses_every_malformed_file_in_one_line() {
     for entry in std::fs::read_dir(malformed_dir()).expect("tests/malformed exists") {
         let path = entry.unwrap().path();
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
-        if name.ends_with(".md") {
+        // The mesh files are at the top; subdirectories hold the other readers' inputs
+        // (all of them are run by malformed_cli.rs).
+        if !(name.ends_with(".obj") || name.ends_with(".ply")) {
             continue;
         }
         for args in [
