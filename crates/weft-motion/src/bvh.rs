@@ -539,6 +539,11 @@ impl Parser<'_, '_> {
                     if name.is_empty() {
                         return Err(self.err(line, format!("{tok} without a joint name")));
                     }
+                    // `ROOT a{ {`: a name ending in '{' would be written back as an
+                    // opening brace (found by fuzzing, docs/fuzzing.md).
+                    if name.ends_with('{') {
+                        return Err(self.err(line, format!("joint name '{name}' ends with '{{'; expected a name, then one '{{' opening the joint's block")));
+                    }
                     if joints.iter().any(|j| j.name == name) {
                         return Err(self.err(line, format!("a second joint named '{name}'; BVH joint names must be unique")));
                     }
