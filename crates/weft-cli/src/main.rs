@@ -31,9 +31,15 @@ fn main() -> ExitCode {
             // clap's message is its first line (`error: …`, naming the argument); the
             // usage block after it is replaced by a pointer to --help, so every error
             // of weft is one line.
+            // The message is the lines before the first blank one (a missing argument's
+            // names are on the lines after `error: the following required …:`).
             let text = err.to_string();
-            let first = text.lines().next().unwrap_or("error: invalid arguments");
-            eprintln!("{first} (see `--help`)");
+            let message: Vec<&str> = text
+                .lines()
+                .take_while(|l| !l.trim().is_empty())
+                .map(str::trim)
+                .collect();
+            eprintln!("{} (see `--help`)", message.join(" "));
             return ExitCode::from(2);
         }
     };

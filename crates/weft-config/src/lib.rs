@@ -28,15 +28,14 @@ pub enum ConfigError {
         expected: Vec<String>,
     },
     /// A value of the wrong type or out of the type's range.
-    #[error("{origin}: [{section}] does not fit the configuration")]
+    #[error("{origin}: [{section}] does not fit the configuration: {message}")]
     Value {
         /// The file.
         origin: String,
         /// The table.
         section: String,
-        /// The cause, naming the field.
-        #[source]
-        source: Box<toml::de::Error>,
+        /// The cause, naming the field, on one line.
+        message: String,
     },
     /// The configuration could not be written as TOML (a value TOML cannot hold).
     #[error("the {what} configuration cannot be written as TOML")]
@@ -54,6 +53,17 @@ pub fn parse_table(text: &str) -> Result<toml::Table, String> {
     toml::from_str(text).map_err(|e| syntax_message(text, &e))
 }
 
+/// A message of toml's on one line: its line breaks (``in `joints` `` on a line of its
+/// own, a trailing newline) become `; `.
+fn one_line(message: &str) -> String {
+    message
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
 /// A TOML error as one line, `line L, column C: message`. toml's own `Display` draws
 /// the offending line and a caret over several lines, which breaks weft's rule of one
 /// line per error (and repeats the user's file back at them).
@@ -65,11 +75,7 @@ pub fn syntax_message(text: &str, error: &toml::de::Error) -> String {
         let column = before[line_start..].chars().count() + 1;
         format!("line {line}, column {column}: ")
     });
-    format!(
-        "{}{}",
-        at.unwrap_or_default(),
-        error.message().trim_end().replace('\n', "; ")
-    )
+    format!("{}{}", at.unwrap_or_default(), one_line(error.message()))
 }
 
 /// `value` as a TOML table (`what` names it in errors).
@@ -123,7 +129,7 @@ pub fn overlay<T: Serialize + DeserializeOwned>(
                 .unwrap_or_else(|| ConfigError::Value {
                     origin: origin.to_string(),
                     section: section.to_string(),
-                    source: Box::new(source),
+                    message: one_line(&source.to_string()),
                 }));
         }
     };
@@ -280,6 +286,7 @@ mod tests {
         .unwrap_err();
         assert!(matches!(e, ConfigError::Value { .. }), "{e:?}");
         assert!(e.to_string().contains("[model]"), "{e}");
+        assert!(!e.to_string().contains('\n'), "{e}");
     }
 
     #[test]

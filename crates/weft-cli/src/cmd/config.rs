@@ -1,5 +1,6 @@
 //! `weft config show`: every default of a model kind's preset, as the config.toml of a run.
 
+use anyhow::Context;
 use clap::Subcommand;
 use weft_models::ModelKind;
 use weft_pipeline::train::preset_toml;
@@ -20,6 +21,8 @@ pub enum ConfigCommand {
 
 pub fn run(c: ConfigCommand) -> anyhow::Result<()> {
     match c {
-        ConfigCommand::Show { model, preset } => super::emit(&preset_toml(model, &preset)?),
+        ConfigCommand::Show { model, preset } => {
+            super::emit(&preset_toml(model, &preset).context("--preset")?)
+        }
     }
 }

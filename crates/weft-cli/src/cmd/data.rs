@@ -85,7 +85,7 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
     };
     let mut config = match (&a.config, &a.preset) {
         (Some(path), _) => DataConfig::load(path).map_err(in_config_file)?,
-        (None, Some(name)) => DataConfig::preset(name)?,
+        (None, Some(name)) => DataConfig::preset(name).context("--preset")?,
         (None, None) => DataConfig::tiny(),
     };
     if let Some(seed) = a.seed {

@@ -2,7 +2,7 @@
 //! evaluation against the LBS-only baseline, an unseen garment animated on an unseen
 //! motion, one attribution map, one HTML report (weft_pipeline::demo).
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -23,14 +23,20 @@ pub struct DemoArgs {
     /// every stage in a minute; the figures it reports mean nothing.
     #[arg(long)]
     quick: bool,
-    /// Training steps (default: the cpu preset's).
+    /// Training steps, at least 1 (default: the cpu preset's).
     #[arg(long)]
-    steps: Option<usize>,
+    steps: Option<std::num::NonZeroUsize>,
 }
 
 pub fn run(args: &DemoArgs) -> Result<()> {
     weft_nn::backend::retain_freed_memory();
     let started = Instant::now();
+    if args.out.exists() && !args.out.is_dir() {
+        bail!(
+            "--out {}: exists and is not a directory; expected a directory for the demo's dataset, run and report",
+            args.out.display()
+        );
+    }
     eprintln!(
         "weft demo: dataset, training, evaluation, animation and attribution in {}",
         args.out.display()
@@ -38,7 +44,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let opts = DemoOptions {
         out: args.out.clone(),
         quick: args.quick,
-        steps: args.steps,
+        steps: args.steps.map(usize::from),
     };
     let bar = FrameBar::new();
     let summary = run_demo(&opts, &Physics, &bar, &mut |line| eprintln!("{line}"))

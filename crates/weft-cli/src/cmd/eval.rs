@@ -79,18 +79,26 @@ pub fn evaluate_run(
     opts: &EvalOptions,
     quiet: bool,
 ) -> Result<EvalReport> {
-    eprintln!(
+    // The heading is printed with the first progress line, so input that fails while
+    // loading gives the one line of its error and nothing before it.
+    let mut heading = Some(format!(
         "evaluating {} on the {} split of {}",
         run.display(),
         opts.split,
         data.display()
-    );
+    ));
     let mut progress = |line: &str| {
+        if let Some(h) = heading.take() {
+            eprintln!("{h}");
+        }
         if !quiet {
             eprintln!("  {line}");
         }
     };
     let (eval, html) = weft_pipeline::evaluate::evaluate_run(run, data, opts, &mut progress)?;
+    if let Some(h) = heading {
+        eprintln!("{h}");
+    }
     eprintln!("  {}", eval.report.methods_line());
     eprintln!(
         "wrote {} (and eval.md, eval.json, pictures)",

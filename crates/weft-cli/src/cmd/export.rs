@@ -51,8 +51,8 @@ pub struct ExportArgs {
 }
 
 pub fn run(args: &ExportArgs) -> Result<()> {
-    let format: ExportFormat = args.format.parse()?;
-    validate_fps(args.fps)?;
+    let format: ExportFormat = args.format.parse().context("--format")?;
+    validate_fps(args.fps).context("--fps")?;
     if format != ExportFormat::Glb && (args.body.is_some() || args.no_normals) {
         bail!(
             "--body, --body-frames and --no-normals apply to --format glb only, not {}",

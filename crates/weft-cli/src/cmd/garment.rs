@@ -192,8 +192,21 @@ fn number<T: std::str::FromStr>(flag: &str, text: &str) -> Result<T> {
         .map_err(|_| anyhow::anyhow!("--{flag} {text:?} is not a valid number"))
 }
 
+/// Whether `path` ends in `.ext` (any case).
+fn has_extension(path: &Path, ext: &str) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case(ext))
+}
+
 fn run_generate(a: &GenerateArgs) -> Result<()> {
-    let kind = GarmentKind::parse(&a.kind)?;
+    let kind = GarmentKind::parse(&a.kind).context("--kind")?;
+    if !has_extension(&a.out, "obj") {
+        bail!(
+            "--out {}: expected an .obj file (garments are written as OBJ with their UVs)",
+            a.out.display()
+        );
+    }
     let vertices: usize = number("vertices", &a.vertices)?;
     let seed: u64 = number("seed", &a.seed)?;
     let mut style = Style::from_seed(kind, seed);
@@ -207,6 +220,9 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
     }
     if let Some(f) = &a.flare {
         style.flare = number("flare", f)?;
+        if !(0.0..=1.0).contains(&style.flare) {
+            bail!("--flare {f}: expected a number from 0 to 1");
+        }
     }
     if let Some(t) = &a.dress_top {
         style.dress_top = match t.as_str() {
@@ -295,13 +311,22 @@ fn write_report(path: Option<&Path>, value: &serde_json::Value) -> Result<()> {
 }
 
 fn drape_options(flags: &DrapeFlags) -> Result<(DrapeOptions, Material)> {
-    let material = Material::preset(&flags.material)?;
+    let material = Material::preset(&flags.material).context("--material")?;
     let options = DrapeOptions {
         max_frames: number("frames", &flags.frames)?,
         settle_speed: number("settle-speed", &flags.settle_speed)?,
         pin_top_opening: !flags.no_pin,
         ..DrapeOptions::default()
     };
+    if options.max_frames == 0 {
+        bail!("--frames 0: expected at least 1 frame");
+    }
+    if !(options.settle_speed.is_finite() && options.settle_speed > 0.0) {
+        bail!(
+            "--settle-speed {}: expected a speed above 0 (m/s)",
+            flags.settle_speed
+        );
+    }
     Ok((options, material))
 }
 
@@ -396,6 +421,12 @@ fn run_drape(a: &DrapeArgs) -> Result<()> {
 }
 
 fn run_prepare(a: &PrepareArgs) -> Result<()> {
+    if let Some(path) = a.weights.as_deref().filter(|p| !has_extension(p, "npy")) {
+        bail!(
+            "--weights {}: expected a .npy file (float32, vertices × joints)",
+            path.display()
+        );
+    }
     let (model, name) = a.garment.body.load()?;
     let from = shape(&model, &a.from_betas, "from-betas", a.garment.limit)?;
     let to = shape(&model, &a.betas, "betas", a.garment.limit)?;

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use anyhow::Context;
 use clap::Args;
 use weft_models::ModelKind;
 use weft_nn::backend::retain_freed_memory;
@@ -27,9 +28,9 @@ pub struct TrainArgs {
     /// `weft config show` prints); an unknown key is refused, naming it.
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Optimiser steps of the whole run (overrides [train] steps).
+    /// Optimiser steps of the whole run, at least 1 (overrides [train] steps).
     #[arg(long)]
-    pub steps: Option<usize>,
+    pub steps: Option<std::num::NonZeroUsize>,
     /// Seed of initialisation and data order (overrides [train] seed).
     #[arg(long)]
     pub seed: Option<u64>,
@@ -43,13 +44,14 @@ pub struct TrainArgs {
 
 pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
     retain_freed_memory();
+    weft_pipeline::train::check_implemented(a.model).context("--model")?;
     let spec = TrainSpec {
         model: a.model,
         data: a.data.clone(),
         out: a.out.clone(),
         preset: a.preset.clone(),
         config: a.config.clone(),
-        steps: a.steps,
+        steps: a.steps.map(usize::from),
         seed: a.seed,
         resume: a.resume,
         progress: !a.quiet,

@@ -2,7 +2,7 @@
 //! Multilevel's own training settings (windows, loss weights, the two-step schedule),
 //! from a preset overlaid by a config file.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use weft_models::multilevel::MultilevelConfig;
@@ -118,17 +118,26 @@ impl MultilevelRun {
             }
             None => None,
         };
+        let from_file = table
+            .as_ref()
+            .and_then(|t| t.get("preset"))
+            .and_then(toml::Value::as_str)
+            .map(str::to_string);
         let name = preset
             .map(str::to_string)
-            .or_else(|| {
-                table
-                    .as_ref()
-                    .and_then(|t| t.get("preset"))
-                    .and_then(toml::Value::as_str)
-                    .map(str::to_string)
-            })
+            .or_else(|| from_file.clone())
             .unwrap_or_else(|| "cpu".to_string());
-        let mut run = Self::preset(&name)?;
+        // An unknown preset names where it came from: the flag or the file's key.
+        let mut run = Self::preset(&name).map_err(|e| {
+            let origin = match (preset, file) {
+                (Some(_), _) | (None, None) => "--preset".to_string(),
+                (None, Some(path)) => format!("{}: preset", path.display()),
+            };
+            TrainError::Parse {
+                path: PathBuf::from(origin),
+                message: e.to_string(),
+            }
+        })?;
         let Some(table) = table else {
             return Ok(run);
         };
@@ -180,8 +189,13 @@ impl MultilevelRun {
         if let Some(t) = section("train")? {
             run.train = weft_config::overlay(&run.train, t, &origin, "train")?;
         }
-        run.train.trainer.validate()?;
-        run.train.task.validate()?;
+        // Values out of range name the file they came from.
+        let in_file = |e: TrainError| TrainError::Parse {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
+        run.train.trainer.validate().map_err(in_file)?;
+        run.train.task.validate().map_err(in_file)?;
         Ok(run)
     }
 
