@@ -47,11 +47,12 @@ pub struct AttributeArgs {
     /// Motion for --garment: an .npz/.bvh file or a procedural name (walk, run, dance, …).
     #[arg(long, default_value = "walk")]
     motion: String,
-    /// Gauss–Legendre nodes N_s of eq. 9 (the paper: 50).
-    #[arg(long, default_value_t = DEFAULT_SAMPLES)]
+    /// Gauss–Legendre nodes N_s of eq. 9 (the paper: 50), 1 to 1000.
+    #[arg(long, default_value_t = DEFAULT_SAMPLES,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=1000))]
     samples: usize,
-    /// Picture side in pixels.
-    #[arg(long, default_value_t = 900)]
+    /// Picture side in pixels, 64 to 8192.
+    #[arg(long, default_value_t = 900, value_parser = clap::value_parser!(u32).range(64..=8192))]
     size: u32,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -62,11 +63,23 @@ pub fn run(args: &AttributeArgs) -> Result<()> {
     if args.out.extension().and_then(|e| e.to_str()) != Some("png") {
         bail!("--out {} must end in .png", args.out.display());
     }
+    // The garment, shape and motion are checked before the run is loaded, so a bad one
+    // is named as such (and costs no model load).
+    let own = match (&args.data, &args.garment) {
+        (None, Some(path)) => {
+            let (body, _) = args.body.load()?;
+            let betas: Vec<f32> = args.body.betas(&body)?.iter().map(|&b| b as f32).collect();
+            let spec = MotionSpec::parse(&args.motion, args.frame.max(1) + 1, 0, 30.0)
+                .context("--motion")?;
+            Some((path, body, betas, spec))
+        }
+        _ => None,
+    };
     let config = read_run_config(&args.run)?;
     let checkpoint = latest_checkpoint(&args.run)?;
     let predictor =
         Predictor::from_checkpoint(config, &checkpoint, &weft_nn::backend::cpu_autodiff())?;
-    let (garment, body, betas, poses, trans, fps, what) = match (&args.data, &args.garment) {
+    let (garment, body, betas, poses, trans, fps, what) = match (&args.data, own) {
         (Some(dir), _) => {
             let ds = Dataset::open(dir)?;
             let record = match &args.sequence {
@@ -90,12 +103,9 @@ pub fn run(args: &AttributeArgs) -> Result<()> {
                 format!("sequence {}", record.id),
             )
         }
-        (None, Some(path)) => {
+        (None, Some((path, body, betas, spec))) => {
             let garment = weft_mesh::read_mesh(path)
                 .with_context(|| format!("reading the garment {}", path.display()))?;
-            let (body, _) = args.body.load()?;
-            let betas: Vec<f32> = args.body.betas(&body)?.iter().map(|&b| b as f32).collect();
-            let spec = MotionSpec::parse(&args.motion, args.frame.max(1) + 1, 0, 30.0)?;
             let motion = spec.load(&body, &betas)?;
             (
                 garment,
