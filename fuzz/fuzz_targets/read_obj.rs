@@ -1,15 +1,20 @@
-//! Any bytes: reading an OBJ never panics, and whatever reads writes back to the same mesh.
+//! Any bytes: reading an OBJ never panics, holds at most `linear_bound` bytes while it
+//! reads, and whatever reads writes back to the same mesh.
 #![no_main]
 
 use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
+use weft_fuzz::{bounded, linear_bound};
 use weft_mesh::io::{load_obj_bytes, write_obj_to};
 use weft_mesh::validate::{summarize, validate};
 
 fuzz_target!(|data: &[u8]| {
     let path = Path::new("fuzz.obj");
-    let Ok(report) = load_obj_bytes(data, path) else {
+    let (read, _) = bounded(data.len(), linear_bound(data.len()), || {
+        load_obj_bytes(data, path)
+    });
+    let Ok(report) = read else {
         return;
     };
     let findings = validate(&report.mesh);
