@@ -209,7 +209,7 @@ fn bad_input_is_one_line_of_error() {
         "--out",
         &out,
     ]);
-    assert!(e.contains("max_frames"), "{e}");
+    assert!(e.contains("--frames 0"), "{e}");
     let e = fails(&[
         "garment",
         "resize",

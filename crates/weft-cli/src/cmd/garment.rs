@@ -201,12 +201,6 @@ fn has_extension(path: &Path, ext: &str) -> bool {
 
 fn run_generate(a: &GenerateArgs) -> Result<()> {
     let kind = GarmentKind::parse(&a.kind).context("--kind")?;
-    if !has_extension(&a.out, "obj") {
-        bail!(
-            "--out {}: expected an .obj file (garments are written as OBJ with their UVs)",
-            a.out.display()
-        );
-    }
     let vertices: usize = number("vertices", &a.vertices)?;
     let seed: u64 = number("seed", &a.seed)?;
     let mut style = Style::from_seed(kind, seed);
@@ -234,6 +228,12 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
     }
     let (model, name) = a.body.load()?;
     let betas = a.body.betas(&model)?;
+    if !has_extension(&a.out, "obj") {
+        bail!(
+            "--out {}: expected an .obj file (garments are written as OBJ with their UVs)",
+            a.out.display()
+        );
+    }
     let fit = FitBody::new(&model, &betas).with_context(|| format!("{name}: fitting"))?;
     let garment = fit.generate(kind, &style, vertices)?;
     let fitted_to = name;
