@@ -158,7 +158,20 @@ fn extreme_betas_are_refused_unless_allowed() {
 fn negative_numbers_name_their_option() {
     let dir = scratch("negative_flags");
     let out = dir.join("never.npz");
-    let cases: [(Vec<&str>, &str); 3] = [
+    let cases: [(Vec<&str>, &str); 4] = [
+        (
+            vec![
+                "motion",
+                "generate",
+                "--kind",
+                "walk",
+                "--fps",
+                "-3",
+                "--out",
+                s(&out),
+            ],
+            "--fps",
+        ),
         (
             vec![
                 "motion",

@@ -675,43 +675,12 @@ const SINGLE: &[(&str, &str, &str)] = &[
 /// Cases that fail today, by their command line exactly as in the tables (a table row's
 /// `{in}` replaced by `{m}/DIR/FILE`), with what goes wrong. Each is skipped until fixed.
 const KNOWN: &[(&str, &str)] = &[
-    // KNOWN: clap's "required arguments were not provided" puts the arguments on the
-    // lines that main.rs drops, so the one line left names none of them.
-    ("mesh info", "prints `error: the following required arguments were not provided: (see `--help`)`, naming no argument"),
-    ("motion generate --out {s}/walk.npz", "prints `error: the following required arguments were not provided: (see `--help`)`, not naming --kind"),
-    ("export --faces {f}/triangle.obj --format pc2 --out {s}/out.pc2", "prints `error: the following required arguments were not provided: (see `--help`)`, not naming --frames"),
     // KNOWN: values checked by the library after parsing, named by the library's own
     // word for them instead of the option.
-    ("motion generate --kind walk --frames 0 --out {s}/walk.npz", "`error: generating walk: 0 frames; expected 1 to 10000000`: names no option"),
-    ("motion generate --kind walk --speed nan --out {s}/walk.npz", "`error: generating walk: speed NaN for walk; expected 0 to 2.5 m/s`: names no option"),
-    ("motion generate --kind walk --amplitude inf --out {s}/walk.npz", "`error: generating walk: amplitude inf; expected 0 to 3`: names no option"),
-    ("motion generate --kind walk --amplitude 100 --out {s}/walk.npz", "`error: generating walk: amplitude 100; expected 0 to 3`: names no option"),
-    ("motion generate --kind walk --amplitude -1 --out {s}/walk.npz", "`error: generating walk: amplitude -1; expected 0 to 3`: names no option"),
     ("simulate --garment {f}/garment.obj --motion walk --frames 0 --out {s}/sim", "`error: generating walk: 0 frames; expected 1 to 10000000`: names no option"),
     ("simulate --garment {f}/garment.obj --motion walk --frames 1000000000 --out {s}/sim", "`error: generating walk: 1000000000 frames; expected 1 to 10000000`: names no option"),
     ("simulate --garment {f}/garment.obj --motion walk --warmup 1000000000 --out {s}/sim", "`error: simulating …/garment.obj: warm-up frames = 1000000000: expected at most 10000 (MAX_WARMUP_FRAMES)`: not --warmup"),
     ("simulate --garment {f}/garment.obj --motion walk --material kevlar --out {s}/sim", "`error: unknown material \"kevlar\"; expected one of: …`: names no option"),
-    ("export --frames {f}/frames.npy --faces {f}/triangle.obj --format pc2 --fps 0 --out {s}/out.pc2", "`error: frame rate 0 is not a positive, finite number of frames per second`: names no option"),
-    ("export --frames {f}/frames.npy --faces {f}/triangle.obj --format mdd --fps -30 --out {s}/out.mdd", "`error: frame rate -30 is not a positive, …`: names no option"),
-    ("export --frames {f}/frames.npy --faces {f}/triangle.obj --format mdd --fps nan --out {s}/out.mdd", "`error: frame rate NaN is not a positive, …`: names no option"),
-    ("export --frames {f}/frames.npy --faces {f}/triangle.obj --format fbx --out {s}/out.fbx", "`error: unknown export format `fbx`; expected one of obj, pc2, mdd, glb`: names no option"),
-    ("garment generate --kind cape --out {s}/skirt.obj", "`error: unknown garment kind `cape` (expected one of: …)`: names no option"),
-    ("garment generate --kind skirt --flare 2 --out {s}/skirt.obj", "`error: style parameter flare = 2 is out of range 0..=1`: not --flare"),
-    ("garment generate --kind skirt --flare nan --out {s}/skirt.obj", "`error: style parameter flare = NaN is out of range 0..=1`: not --flare"),
-    ("garment drape --garment {f}/garment.obj --frames 0 --out {s}/draped.obj", "`error: drape option max_frames = 0 is out of range: expected at least 1 frame`: not --frames"),
-    ("garment drape --garment {f}/garment.obj --settle-speed -1 --out {s}/draped.obj", "`error: drape option settle_speed = -1 is out of range: …`: not --settle-speed"),
-    ("garment drape --garment {f}/garment.obj --settle-speed 0 --out {s}/draped.obj", "`error: drape option settle_speed = 0 is out of range: …`: not --settle-speed"),
-    ("garment drape --garment {f}/garment.obj --settle-speed nan --out {s}/draped.obj", "`error: drape option settle_speed = NaN is out of range: …`: not --settle-speed"),
-    ("garment drape --garment {f}/garment.obj --material kevlar --out {s}/draped.obj", "`error: unknown material \"kevlar\"; expected one of: …`: names no option"),
-    ("garment prepare --garment {f}/garment.obj --material kevlar --out {s}/prepared.obj", "`error: unknown material \"kevlar\"; expected one of: …`: names no option"),
-    ("motion info {f}/walk.bvh --scale 0", "`error: BVH scale 0; expected metres per file unit above 0`: not --scale"),
-    ("motion info {f}/walk.bvh --scale -1", "`error: BVH scale -1; expected metres per file unit above 0`: not --scale"),
-    ("motion info {f}/walk.bvh --scale nan", "`error: BVH scale NaN; expected metres per file unit above 0`: not --scale"),
-    ("train --data {s}/no_dataset --out {s}/run --steps 0", "`error: training config: train.steps = 0: at least 1`: names the config key, not --steps"),
-    ("train --data {s}/no_dataset --out {s}/run --model hood", "`error: model `hood` is not implemented in this build of weft yet; available: multilevel`: names no option"),
-    ("train --data {s}/no_dataset --out {s}/run --preset gpu", "`error: model preset: expected one of paper, cpu, found \"gpu\"`: names no option"),
-    ("config show --preset gpu", "`error: model preset: expected one of paper, cpu, found \"gpu\"`: names no option"),
-    ("data generate --preset huge --out {s}/dataset", "`error: config field preset: \"huge\"; expected one of tiny, paper`: a config field, not --preset"),
     ("animate {s}/no_run --garment {f}/garment.obj --motion walk --format fbx --out {s}/a.fbx", "`error: unknown export format `fbx`; …`: names no option"),
     // KNOWN: animate and attribute check these options only after loading the run, so a
     // bad value is reported as the run's error (or not at all with a good run).
@@ -719,31 +688,6 @@ const KNOWN: &[(&str, &str)] = &[
     ("animate {s}/no_run --garment {f}/garment.obj --motion walk --betas nan --format pc2 --out {s}/a.pc2", "reports the missing run, not --betas NaN"),
     ("animate {s}/no_run --garment {f}/garment.obj --motion walk --frames 1000000000 --format pc2 --out {s}/a.pc2", "reports the missing run, not --frames 1000000000"),
     ("animate {s}/no_run --garment {f}/garment.obj --motion moonwalk --format pc2 --out {s}/a.pc2", "reports the missing run, not --motion moonwalk"),
-    ("attribute {m}/run/no_checkpoint --vertex 0 --samples 0 --garment {f}/garment.obj --out {s}/a.png", "reports the run's missing checkpoint, not --samples 0"),
-    ("attribute {m}/run/no_checkpoint --vertex 0 --size 0 --garment {f}/garment.obj --out {s}/a.png", "reports the run's missing checkpoint, not --size 0"),
-    ("attribute {s}/no_run --vertex 0 --size 100000 --garment {f}/garment.obj --out {s}/a.png", "reports the missing run, not --size 100000"),
-    ("attribute {s}/no_run --vertex 0 --garment {f}/garment.obj --betas nan --out {s}/a.png", "reports the missing run, not --betas NaN"),
-    ("attribute {s}/no_run --vertex 0 --garment {f}/garment.obj --motion moonwalk --out {s}/a.png", "reports the missing run, not --motion moonwalk"),
-    // KNOWN: eval prints `evaluating RUN on the test split of DATA` on stderr before it
-    // reads anything, so every error of eval is two lines.
-    ("eval {s}/no_run --data {m}/dataset/manifest_empty", "`evaluating …/no_run on the test split of …` then the error: two lines"),
-    ("eval {m}/run/config_syntax_error --data {m}/dataset/manifest_empty", "`evaluating …` then the error: two lines"),
-    ("eval {m}/run/no_checkpoint --data {m}/dataset/manifest_not_json", "`evaluating …` then the error: two lines"),
-    ("eval {s}/a_file.obj --data {m}/dataset/manifest_empty", "`evaluating …` then the error: two lines"),
-    // KNOWN: range errors of training configs name the key but not the file.
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/steps_zero.toml --quiet", "`error: training config: train.steps = 0: at least 1`: not the file"),
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/window_zero.toml --quiet", "`error: training config: train.window = 0: at least 1`: not the file"),
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/batch_zero.toml --quiet", "`error: training config: train.batch = 0: at least 1`: not the file"),
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/learning_rate_negative.toml --quiet", "`error: training config: train.learning_rate = -0.1: a finite rate > 0`: not the file"),
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/learning_rate_nan.toml --quiet", "`error: training config: train.learning_rate = NaN: a finite rate > 0`: not the file"),
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/preset_unknown.toml --quiet", "`error: model preset: expected one of paper, cpu, found \"gpu\"`: not the file"),
-    // KNOWN: serde's type errors in training configs end in a newline (and "in `key`"
-    // on a line of its own), so the error is two or three lines.
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/steps_string.toml --quiet", "`… invalid type: string \"many\", expected usize` then an empty line"),
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/steps_negative.toml --quiet", "`… invalid value: integer `-5`, expected usize` then an empty line"),
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/optimizer_unknown.toml --quiet", "`… unknown variant `adamx`, …` then an empty line"),
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/joints_wrong_type.toml --quiet", "`… invalid type: string \"24\", expected usize`, `in `joints``, an empty line"),
-    ("train --data {s}/no_dataset --out {s}/run --config {m}/config/train/pooling_unknown.toml --quiet", "`… unknown variant `random`, …`, `in `pooling``, an empty line"),
     // KNOWN: a dataset config whose motion file is missing or malformed is not checked
     // up front: every other sequence is simulated (seconds), a `sequence … failed` line
     // is printed per failure, the summary goes to stdout and the dataset is left behind.
@@ -751,13 +695,9 @@ const KNOWN: &[(&str, &str)] = &[
     ("data generate --config {m}/config/data/motion_file_malformed.toml --out {s}/dataset", "simulates the other splits, prints 4 lines and a summary on stdout, leaves dataset/"),
     // KNOWN: no upper bound checked up front: the command starts the work and runs on.
     ("simulate --garment {f}/garment.obj --motion walk --substeps 1000000 --out {s}/sim", "starts simulating with a million sub-steps per frame (killed after the timeout)"),
-    ("demo --steps 0 --out {s}/demo", "starts the whole demo (dataset generation) instead of refusing --steps 0 (killed after the timeout)"),
     // KNOWN: other.
-    ("demo --out {s}/a_file.obj", "prints the demo's banner and `[1/5] dataset …` before the error: three lines"),
     ("simulate --garment {f}/garment.obj --body {m}/body/two_joints.npz --motion walk --frames 1 --out {s}/sim", "`error: simulating …/garment.obj: the body could not be posed: pose has 24 entries; expected one per joint (2)`: names the garment, not the body file"),
     ("motion info {f}/walk.bvh --map nosuchpreset", "`error: nosuchpreset: No such file or directory (os error 2): No such file or directory (os error 2)`: an unknown preset is read as a file, the OS error twice, the presets not listed"),
-    ("garment generate --kind skirt --vertices 300 --out {s}/skirt.stl", "exit 0: writes OBJ text to skirt.stl"),
-    ("garment prepare --garment {f}/garment.obj --no-drape --weights {s}/weights.txt --out {s}/prepared.obj", "exit 0: writes the .npy weights to weights.txt"),
 ];
 
 // ------------------------------------------------------------------------- the runner

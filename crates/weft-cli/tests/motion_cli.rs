@@ -279,3 +279,169 @@ fn a_body_file_shapes_the_bvh_skeleton() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("nobody.npz"), "{}", stderr(&o));
 }
+
+/// The vertical (Y) and largest horizontal extent of an OBJ's vertices, metres.
+fn obj_extents(path: &Path) -> (f64, f64) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for line in std::fs::read_to_string(path).unwrap().lines() {
+        if let Some(rest) = line.strip_prefix("v ") {
+            for (k, x) in rest.split_whitespace().take(3).enumerate() {
+                let x: f64 = x.parse().unwrap();
+                lo[k] = lo[k].min(x);
+                hi[k] = hi[k].max(x);
+            }
+        }
+    }
+    (hi[1] - lo[1], (hi[0] - lo[0]).max(hi[2] - lo[2]))
+}
+
+fn generate_walk(out: &Path, extra: &[&str]) {
+    let mut args = vec!["motion", "generate", "--kind", "walk", "--out", s(out)];
+    args.extend_from_slice(extra);
+    let o = weft(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Issue 17 item 10: `motion generate --npz-up y` wrote a file that `body pose`,
+/// `simulate` and `animate` read back lying on its back. Files record their up axis;
+/// `--up` overrides it wherever a motion is read.
+#[test]
+fn a_y_up_npz_reads_back_upright_and_up_overrides() {
+    let dir = scratch("up");
+    let walk = dir.join("walk_y.npz");
+    generate_walk(&walk, &["--frames", "3", "--npz-up", "y"]);
+
+    let upright = dir.join("upright.obj");
+    let o = weft(&["body", "pose", "--motion", s(&walk), "--out", s(&upright)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (height, _) = obj_extents(&upright);
+    assert!(height > 1.4, "standing body {height:.2} m tall");
+
+    // --up z says otherwise: the body lies down, and the override is pointed out.
+    let lying = dir.join("lying.obj");
+    let o = weft(&[
+        "body",
+        "pose",
+        "--motion",
+        s(&walk),
+        "--up",
+        "z",
+        "--out",
+        s(&lying),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (height, across) = obj_extents(&lying);
+    assert!(
+        height < 1.0 && across > 1.4,
+        "{height:.2} m tall, {across:.2} m long"
+    );
+    assert!(stderr(&o).contains("records Y up"), "{}", stderr(&o));
+
+    // motion info says where the axis came from.
+    let o = weft(&["motion", "info", s(&walk), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["source"]["up"], "Y");
+    assert_eq!(v["source"]["up_from"], "recorded in the file");
+    let o = weft(&["motion", "info", s(&walk)]);
+    assert!(
+        stdout(&o).contains("file Y up (recorded in the file; read as Y up)"),
+        "{}",
+        stdout(&o)
+    );
+
+    // A procedural motion has no file axis: --up with one is refused, not ignored.
+    let o = weft(&[
+        "simulate",
+        "--garment",
+        s(&upright),
+        "--motion",
+        "walk",
+        "--up",
+        "y",
+        "--out",
+        s(&dir.join("sim")),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--up applies to motion files"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Issue 17 item 11: `--fps` with a motion file was silently ignored (a 120 fps file
+/// with `--fps 30` gave 120 fps). The file is resampled, and stderr says so.
+#[test]
+fn fps_with_a_motion_file_resamples_and_says_so() {
+    let dir = scratch("fps");
+    let walk = dir.join("walk120.npz");
+    generate_walk(&walk, &["--frames", "25", "--fps", "120"]);
+    let said = "resampled from 120 fps (25 frames) to 30 fps (7 frames)";
+
+    let frames = dir.join("frames");
+    let o = weft(&[
+        "body",
+        "pose",
+        "--motion",
+        s(&walk),
+        "--fps",
+        "30",
+        "--all-frames",
+        "--out",
+        s(&frames),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains(said), "{}", stderr(&o));
+    assert!(stdout(&o).contains("7 frames at 30 fps"), "{}", stdout(&o));
+    assert_eq!(std::fs::read_dir(&frames).unwrap().count(), 7);
+
+    let o = weft(&["motion", "info", s(&walk), "--fps", "30", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains(said), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(
+        (v["fps"].as_f64(), v["frames"].as_u64()),
+        (Some(30.0), Some(7))
+    );
+
+    // weft simulate: the frames written are at 30 fps.
+    let skirt = dir.join("skirt.obj");
+    let o = weft(&[
+        "garment",
+        "generate",
+        "--kind",
+        "skirt",
+        "--vertices",
+        "300",
+        "--seed",
+        "1",
+        "--out",
+        s(&skirt),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.join("sim");
+    let o = weft(&[
+        "simulate",
+        "--garment",
+        s(&skirt),
+        "--motion",
+        s(&walk),
+        "--fps",
+        "30",
+        "--frames",
+        "2",
+        "--warmup",
+        "1",
+        "--substeps",
+        "1",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains(said), "{}", stderr(&o));
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("stats.json")).unwrap()).unwrap();
+    assert_eq!(stats["fps"].as_f64(), Some(30.0));
+}

@@ -31,8 +31,8 @@ use weft_body::BodyModel;
 use weft_garment::{FitBody, Garment, GarmentKind, Style};
 use weft_mesh::io::lock::{remove_stale_temps, Access, DirLock, LOCK_FILE};
 use weft_motion::{
-    generate as procedural_motion, read_motion, resample, Motion, MotionFileOptions, MotionKind,
-    ProceduralParams,
+    body_rest_joints, generate as procedural_motion, load_motion, resample, Motion,
+    MotionFileOptions, MotionKind, ProceduralParams,
 };
 use weft_sim::Material;
 
@@ -279,30 +279,32 @@ pub fn generate(
         .collect();
     let owned = manifest.sequences.iter().filter(|s| owns(s.index)).count();
 
-    // Motions and fitted bodies used by this run, built once each.
-    let mut motions: BTreeMap<String, Result<Motion, String>> = BTreeMap::new();
+    // Motions and fitted bodies used by this run, built once each (file motions once
+    // per body, see `MotionKey`).
+    let mut motions: BTreeMap<MotionKey, Result<Motion, String>> = BTreeMap::new();
     for &i in &pending {
-        let id = &manifest.sequences[i].motion_id;
-        if !motions.contains_key(id) {
+        let s = &manifest.sequences[i];
+        let key = motion_key(&manifest, s);
+        if let std::collections::btree_map::Entry::Vacant(slot) = motions.entry(key) {
             let record = manifest
                 .motions
                 .iter()
-                .find(|m| &m.id == id)
+                .find(|m| m.id == s.motion_id)
                 .ok_or_else(|| DataError::UnknownId {
                     kind: "motion",
-                    id: id.clone(),
+                    id: s.motion_id.clone(),
                     dir: out.to_path_buf(),
                 })?;
-            motions.insert(
-                id.clone(),
-                build_motion(record, config.fps, &model).map_err(|e| error_chain(&e)),
-            );
+            let betas = betas_f64(&s.betas);
+            let built = build_motion(record, config.fps, &model, &betas);
+            slot.insert(built.map_err(|e| error_chain(&e)));
         }
     }
     // File motions learn their length here: fix the frame ranges of their sequences.
     for &i in &pending {
-        let s = &mut manifest.sequences[i];
-        if let Some(Ok(m)) = motions.get(&s.motion_id) {
+        let key = motion_key(&manifest, &manifest.sequences[i]);
+        if let Some(Ok(m)) = motions.get(&key) {
+            let s = &mut manifest.sequences[i];
             s.frame_range[1] = s.frame_range[0] + m.frame_count();
         }
     }
@@ -608,8 +610,30 @@ fn write_garment_templates(
     })
 }
 
-/// The motion of a record at the dataset's frame rate, cut to its frames.
-fn build_motion(record: &MotionRecord, fps: f64, model: &BodyModel) -> Result<Motion, DataError> {
+/// Which built motion a sequence uses: `(motion id, body id)` for a file motion, read
+/// for the sequence's body — its rest joints J(β) place the root, as `weft simulate`,
+/// `weft animate` and `weft body pose` read the file for that body, so the dataset's
+/// body stands where theirs does — and `(motion id, None)` for a procedural motion, the
+/// same for every body.
+type MotionKey = (String, Option<String>);
+
+fn motion_key(manifest: &Manifest, s: &SequenceRecord) -> MotionKey {
+    let file = manifest
+        .motions
+        .iter()
+        .find(|m| m.id == s.motion_id)
+        .is_some_and(|m| matches!(m.origin, MotionOrigin::File { .. }));
+    (s.motion_id.clone(), file.then(|| s.body_id.clone()))
+}
+
+/// The motion of a record at the dataset's frame rate, cut to its frames; a file is read
+/// for the body at shape `betas`.
+fn build_motion(
+    record: &MotionRecord,
+    fps: f64,
+    model: &BodyModel,
+    betas: &[f64],
+) -> Result<Motion, DataError> {
     let err = |source| DataError::Motion {
         id: record.id.clone(),
         source: Box::new(source),
@@ -635,18 +659,12 @@ fn build_motion(record: &MotionRecord, fps: f64, model: &BodyModel) -> Result<Mo
             procedural_motion(&params).map_err(err)
         }
         MotionOrigin::File { path, start } => {
-            let rest = model
-                .joints(&vec![0.0; model.num_betas()])
-                .map_err(|source| DataError::Body {
-                    what: "joints of the zero shape".into(),
-                    source: Box::new(source),
-                })?;
-            let mut options = MotionFileOptions::default();
-            for (slot, j) in options.rest_joints.iter_mut().zip(&rest) {
-                *slot = *j;
-            }
-            let (motion, _) = read_motion(Path::new(path), &options).map_err(err)?;
-            let motion = resample(&motion, fps).map_err(err)?;
+            let rest = body_rest_joints(model, betas).map_err(err)?;
+            let options = MotionFileOptions::for_body(rest, None);
+            // The file's own rate (one that records none is an error), then the
+            // dataset's.
+            let read = load_motion(Path::new(path), &options, None).map_err(err)?;
+            let motion = resample(&read.motion, fps).map_err(err)?;
             let available = motion.frame_count();
             let end = record.frames.map_or(available, |f| start + f);
             if *start >= available || end > available {
@@ -680,7 +698,7 @@ fn run_sequence(
     manifest: &Manifest,
     config: &DataConfig,
     model: &BodyModel,
-    motions: &BTreeMap<String, Result<Motion, String>>,
+    motions: &BTreeMap<MotionKey, Result<Motion, String>>,
     fits: &BTreeMap<String, Result<FitBody, String>>,
     out: &Path,
     simulator: &dyn SequenceSimulator,
@@ -697,7 +715,7 @@ fn run_sequence(
             frames: 0,
         })
     };
-    let motion = match motions.get(&r.motion_id) {
+    let motion = match motions.get(&motion_key(manifest, &r)) {
         Some(Ok(m)) => m,
         Some(Err(e)) => return fail(r, e.clone()),
         None => return fail(r, format!("motion {} was not built", record.motion_id)),

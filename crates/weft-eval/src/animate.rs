@@ -1,9 +1,9 @@
 //! `weft animate`: a trained model drives any garment (unseen topology included) on any
 //! body shape and motion, and the frames are written in a format graphics tools read.
 //!
-//! Motions come from a file (AMASS `.npz`, `.bvh`, read by weft-body with the body's own
-//! rest joints `J(β)` as the retargeting target) or from weft's procedural library by
-//! name. Export goes through weft-mesh's writers (atomic: a failure leaves nothing).
+//! Motions come from a file (AMASS `.npz`, `.bvh`, read by [`weft_motion::load_motion`]
+//! against the body's own rest joints `J(β)`, as every command reads motion files) or
+//! from weft's procedural library by name. Export goes through weft-mesh's writers (atomic: a failure leaves nothing).
 
 use std::path::Path;
 
@@ -13,7 +13,10 @@ use weft_mesh::export::gltf::{write_glb, GlbMesh, GlbOptions, BODY_COLOR, GARMEN
 use weft_mesh::export::{export, ExportFormat, Frames};
 use weft_mesh::TriMesh;
 use weft_models::{Clip, Deformer};
-use weft_motion::{generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams};
+use weft_motion::{
+    body_rest_joints, generate, load_motion, Motion, MotionFileOptions, MotionKind,
+    ProceduralParams, UpAxis,
+};
 
 use crate::error::EvalError;
 
@@ -21,7 +24,14 @@ use crate::error::EvalError;
 #[derive(Clone, Debug, PartialEq)]
 pub enum MotionSpec {
     /// An AMASS `.npz` or `.bvh` file.
-    File(std::path::PathBuf),
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Its up axis; `None`: as the file records, else the format's convention.
+        up: Option<UpAxis>,
+        /// The frame rate to resample to; `None`: the file's own.
+        fps: Option<f64>,
+    },
     /// A procedural motion.
     Procedural {
         /// walk, run, jump, dance, …
@@ -36,12 +46,16 @@ pub enum MotionSpec {
 }
 
 impl MotionSpec {
-    /// `spec` is an existing file, or a procedural motion name (`walk`, `dance`, …) with
-    /// `frames`, `seed` and `fps`.
+    /// `spec` is an existing file (read at its own rate and up axis), or a procedural
+    /// motion name (`walk`, `dance`, …) with `frames`, `seed` and `fps`.
     pub fn parse(spec: &str, frames: usize, seed: u64, fps: f64) -> Result<Self, EvalError> {
         let path = Path::new(spec);
         if path.exists() {
-            return Ok(MotionSpec::File(path.to_path_buf()));
+            return Ok(MotionSpec::File {
+                path: path.to_path_buf(),
+                up: None,
+                fps: None,
+            });
         }
         match MotionKind::parse(spec) {
             Some(kind) => Ok(MotionSpec::Procedural {
@@ -59,23 +73,14 @@ impl MotionSpec {
     /// Reads or generates the motion for `body` at shape `betas`.
     pub fn load(&self, body: &BodyModel, betas: &[f32]) -> Result<Motion, EvalError> {
         match self {
-            MotionSpec::File(path) => {
-                let joints =
-                    body.joints(&betas.iter().map(|&b| f64::from(b)).collect::<Vec<_>>())?;
-                let rest_joints: [[f64; 3]; 24] =
-                    joints.try_into().map_err(|j: Vec<[f64; 3]>| {
-                        EvalError::Invalid(format!(
-                            "the body has {} joints; motion files drive SMPL's 24",
-                            j.len()
-                        ))
-                    })?;
-                let options = MotionFileOptions {
-                    rest_joints,
-                    ..MotionFileOptions::default()
-                };
-                let (m, _) = read_motion(path, &options)
+            MotionSpec::File { path, up, fps } => {
+                let betas: Vec<f64> = betas.iter().map(|&b| f64::from(b)).collect();
+                let invalid = |e: weft_motion::MotionError| EvalError::Invalid(e.to_string());
+                let rest = body_rest_joints(body, &betas).map_err(invalid)?;
+                let options = MotionFileOptions::for_body(rest, *up);
+                let read = load_motion(path, &options, *fps)
                     .map_err(|e| EvalError::Invalid(format!("{}: {e}", path.display())))?;
-                Ok(m)
+                Ok(read.motion)
             }
             MotionSpec::Procedural {
                 kind,

@@ -10,6 +10,7 @@
 //! | `trans` | (N, 3) | root translation, metres |
 //! | `mocap_framerate` or `mocap_frame_rate` | () or (1,) | frames per second (SMPL-H and SMPL-X releases name it differently) |
 //! | `betas` | (B,) or (1, B), optional | body shape β |
+//! | `weft_up_axis` | (3,), optional | the file's up direction, (0, 0, 1) or (0, 1, 0): recorded by weft ([`UP_AXIS_KEY`]) |
 //!
 //! **Joints.** SMPL, SMPL-H and SMPL-X share their first 22 joints (pelvis to wrists)
 //! in the same order. SMPL's joints 22 and 23 (`left_hand`, `right_hand`, a single
@@ -34,6 +35,13 @@
 //! its pelvis at the origin). Writing applies the inverse with the same two, so a round
 //! trip is exact. Files already Y up are read with [`UpAxis::Y`].
 //!
+//! **Which axis is up.** AMASS files record no up axis; they are Z up. Files weft
+//! writes record theirs under [`UP_AXIS_KEY`] (Z unless asked otherwise), so they read
+//! back the right way up whichever axis they were written with. The axis used is, first
+//! to last: [`AmassOptions::up`] when given, the recorded one, Z. When neither was
+//! given nor recorded and the body's trunk lies along the other axis in most frames,
+//! the report warns that the file may be the other way up.
+//!
 //! **Size.** The `.npz` reader bounds every member by its archive entry (and at most
 //! 8 GiB inflated); poses longer than [`MAX_FRAMES`](super::MAX_FRAMES) are refused.
 
@@ -53,11 +61,41 @@ use weft_body::Pose;
 /// Joints shared by SMPL, SMPL-H and SMPL-X (pelvis to wrists).
 const SHARED_JOINTS: usize = 22;
 
+/// The key under which weft records a file's up axis: the up direction in the file's
+/// coordinates as three `float64`, (0, 0, 1) for Z up and (0, 1, 0) for Y up. AMASS has
+/// no such key; a reader that does not know it skips it as it skips `gender` or `dmpls`
+/// (NumPy loads it as a plain array, without pickles).
+pub const UP_AXIS_KEY: &str = "weft_up_axis";
+
+/// Where the up axis a file was read with came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UpFrom {
+    /// Given by the caller ([`AmassOptions::up`], `--up`).
+    Given,
+    /// Recorded in the file ([`UP_AXIS_KEY`]).
+    Recorded,
+    /// Neither: AMASS's Z.
+    Default,
+}
+
+impl UpFrom {
+    /// A short phrase for reports: "given", "recorded in the file", "AMASS default".
+    pub fn phrase(self) -> &'static str {
+        match self {
+            UpFrom::Given => "given",
+            UpFrom::Recorded => "recorded in the file",
+            UpFrom::Default => "AMASS default",
+        }
+    }
+}
+
 /// Options of [`read_amass`] and [`write_amass`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct AmassOptions {
-    /// The file's up axis; AMASS is Z up.
-    pub up: UpAxis,
+    /// The file's up axis. Reading: `None` takes the axis the file records under
+    /// [`UP_AXIS_KEY`], else Z as in AMASS; a given axis overrides a recorded one.
+    /// Writing: the axis to write (`None`: Z), recorded in the file.
+    pub up: Option<UpAxis>,
     /// The rest pelvis J₀ˢ of the body the file's parameters belong to (metres, SMPL's
     /// Y-up model frame): SMPL's, for AMASS.
     pub source_pelvis: [f64; 3],
@@ -71,7 +109,7 @@ pub struct AmassOptions {
 impl Default for AmassOptions {
     fn default() -> Self {
         AmassOptions {
-            up: UpAxis::Z,
+            up: None,
             source_pelvis: DEFAULT_REST_JOINTS[0],
             target_pelvis: DEFAULT_REST_JOINTS[0],
             fps_if_missing: None,
@@ -127,10 +165,17 @@ pub struct AmassReport {
     pub dropped_joints: usize,
     /// Keys weft does not read.
     pub unused_keys: Vec<String>,
+    /// The up axis the file was read with.
+    pub up: UpAxis,
+    /// Where that axis came from.
+    pub up_from: UpFrom,
+    /// What looks wrong but was read anyway (a recorded axis overridden, a body that
+    /// lies down in most frames with the default axis), one sentence each.
+    pub warnings: Vec<String>,
 }
 
 const FRAME_RATE_KEYS: [&str; 2] = ["mocap_framerate", "mocap_frame_rate"];
-const READ_KEYS: [&str; 7] = [
+const READ_KEYS: [&str; 8] = [
     "poses",
     "root_orient",
     "pose_body",
@@ -138,6 +183,7 @@ const READ_KEYS: [&str; 7] = [
     "betas",
     "mocap_framerate",
     "mocap_frame_rate",
+    UP_AXIS_KEY,
 ];
 
 /// Reads an AMASS-style `.npz` motion (see the module documentation).
@@ -269,8 +315,48 @@ pub fn amass_from_npz(
         None
     };
 
+    // Up axis: given, recorded, or AMASS's.
+    let recorded = if npz.contains(UP_AXIS_KEY) {
+        let v = npz.floats(UP_AXIS_KEY, &[Some(3)])?.data;
+        let axis = [UpAxis::Y, UpAxis::Z].into_iter().find(|&a| {
+            up_vector(a)
+                .iter()
+                .zip(&v)
+                .all(|(x, y)| (x - y).abs() < 1e-6)
+        });
+        match axis {
+            Some(a) => Some(a),
+            None => {
+                return Err(bad(
+                    UP_AXIS_KEY,
+                    format!("is {v:?}; expected [0, 1, 0] for Y up or [0, 0, 1] for Z up"),
+                ))
+            }
+        }
+    } else {
+        None
+    };
+    let mut warnings = Vec::new();
+    let (up, up_from) = match (options.up, recorded) {
+        (Some(given), rec) => {
+            if let Some(rec) = rec.filter(|&r| r != given) {
+                warnings.push(format!(
+                    "the file records {} up ({UP_AXIS_KEY}); read {} up as asked",
+                    rec.name(),
+                    given.name()
+                ));
+            }
+            (given, UpFrom::Given)
+        }
+        (None, Some(rec)) => (rec, UpFrom::Recorded),
+        (None, None) => (UpAxis::Z, UpFrom::Default),
+    };
+    if up_from == UpFrom::Default {
+        warnings.extend(lying_down_warning(&poses_flat, stride, up));
+    }
+
     // Convert.
-    let c = options.up.to_y_up();
+    let c = up.to_y_up();
     let (j0s, j0t) = (
         Vector3::from(options.source_pelvis),
         Vector3::from(options.target_pelvis),
@@ -313,8 +399,56 @@ pub fn amass_from_npz(
             .into_iter()
             .filter(|k| !READ_KEYS.contains(&k.as_str()))
             .collect(),
+        up,
+        up_from,
+        warnings,
     };
     Ok((motion, report))
+}
+
+/// The up direction of `up` in that file's own coordinates.
+fn up_vector(up: UpAxis) -> [f64; 3] {
+    match up {
+        UpAxis::Y => [0.0, 1.0, 0.0],
+        UpAxis::Z => [0.0, 0.0, 1.0],
+    }
+}
+
+/// A warning when, read `up` up, the body lies down in most frames but would stand along
+/// the other axis: the mean over frames of how far the trunk (the root's rotation of
+/// SMPL's model Y) points along each axis of the file. Capture of someone lying down
+/// exists, so this only warns.
+fn lying_down_warning(poses_flat: &[f64], stride: usize, up: UpAxis) -> Option<String> {
+    let other = match up {
+        UpAxis::Y => UpAxis::Z,
+        UpAxis::Z => UpAxis::Y,
+    };
+    let (u, o) = (
+        Vector3::from(up_vector(up)),
+        Vector3::from(up_vector(other)),
+    );
+    let (mut along_up, mut along_other, mut n) = (0.0, 0.0, 0usize);
+    for row in poses_flat.chunks_exact(stride) {
+        let root = quat([row[0] as f32, row[1] as f32, row[2] as f32]);
+        let trunk = root * Vector3::y();
+        along_up += trunk.dot(&u);
+        along_other += trunk.dot(&o);
+        n += 1;
+    }
+    let n = n.max(1) as f64;
+    let (along_up, along_other) = (along_up / n, along_other / n);
+    (along_up < 0.5 && along_other > 0.8).then(|| {
+        format!(
+            "read {} up (AMASS's axis; the file records none), the body lies down: its trunk points along the file's {} axis (mean {:.2}) rather than {} (mean {:.2}); if the file is {} up, read it with --up {}",
+            up.name(),
+            other.name(),
+            along_other,
+            up.name(),
+            along_up,
+            other.name(),
+            other.name().to_ascii_lowercase()
+        )
+    })
 }
 
 /// A number stored as a 0-d or one-element array, float or integer.
@@ -359,10 +493,13 @@ fn check_pelvis(options: &AmassOptions) -> Result<(), MotionError> {
 
 /// The AMASS-style arrays of a motion: `poses` (N, 72) in SMPL's layout, `trans`
 /// (N, 3), `mocap_framerate` (a 0-d array) and, when the motion records a shape,
-/// `betas` (B,), all `float64` as AMASS stores them, converted to `options.up`.
+/// `betas` (B,), all `float64` as AMASS stores them, converted to `options.up` (Z when
+/// `None`), and that axis under [`UP_AXIS_KEY`] so that weft reads the file back the
+/// right way up.
 pub fn amass_npz(motion: &Motion, options: &AmassOptions) -> Result<NpzWriter, MotionError> {
     check_pelvis(options)?;
-    let c_inv = options.up.to_y_up().inverse();
+    let up = options.up.unwrap_or(UpAxis::Z);
+    let c_inv = up.to_y_up().inverse();
     let (j0s, j0t) = (
         Vector3::from(options.source_pelvis),
         Vector3::from(options.target_pelvis),
@@ -391,6 +528,7 @@ pub fn amass_npz(motion: &Motion, options: &AmassOptions) -> Result<NpzWriter, M
         let b: Vec<f64> = b.iter().map(|&x| f64::from(x)).collect();
         w.add("betas", &[b.len()], &b).map_err(add_err)?;
     }
+    w.add(UP_AXIS_KEY, &[3], &up_vector(up)).map_err(add_err)?;
     Ok(w)
 }
 

@@ -22,6 +22,7 @@
 //! expected. It checks the declared frame count against the bytes that follow before
 //! allocating, so a corrupt `Frames:` line cannot exhaust memory.
 
+use std::collections::HashSet;
 use std::fmt::Write as _;
 use std::io;
 use std::path::Path;
@@ -314,7 +315,7 @@ impl Bvh {
         // need not be the order of `joints` (SMPL's is not depth first).
         let mut order = Vec::with_capacity(self.joints.len());
         for r in roots {
-            self.write_joint(&mut s, r, 0, &children, &mut order);
+            self.write_tree(&mut s, r, &children, &mut order);
         }
         let _ = writeln!(s, "MOTION\nFrames: {}", self.frame_count);
         let _ = writeln!(s, "Frame Time: {}", self.frame_time);
@@ -344,40 +345,55 @@ impl Bvh {
             .map_err(|e| MotionError::io(path, e))
     }
 
-    fn write_joint(
+    /// Writes the block of joint `root` and of everything below it, depth first, and
+    /// appends the joints to `order` as it goes. Iterative, so a hierarchy as deep as the
+    /// file is long needs no deep call stack; indentation stops growing past
+    /// [`MAX_INDENT`] levels, so the text stays linear in the number of joints.
+    fn write_tree(
         &self,
         s: &mut String,
-        j: usize,
-        depth: usize,
+        root: usize,
         children: &[Vec<usize>],
         order: &mut Vec<usize>,
     ) {
-        order.push(j);
-        let joint = &self.joints[j];
-        let pad = "\t".repeat(depth);
-        let keyword = if joint.parent.is_none() {
-            "ROOT"
-        } else {
-            "JOINT"
-        };
-        let _ = writeln!(s, "{pad}{keyword} {}\n{pad}{{", joint.name);
-        write_offset(s, &pad, joint.offset);
-        let _ = write!(s, "{pad}\tCHANNELS {}", joint.channels.len());
-        for c in &joint.channels {
-            let _ = write!(s, " {}", c.name());
+        // (joint, depth, whether its block is open): a joint is visited twice, once to
+        // open its block and list its children, once to close it.
+        let mut stack = vec![(root, 0usize, false)];
+        while let Some((j, depth, opened)) = stack.pop() {
+            let joint = &self.joints[j];
+            let pad = "\t".repeat(depth.min(MAX_INDENT));
+            if opened {
+                for e in &joint.end_sites {
+                    let _ = writeln!(s, "{pad}\tEnd Site\n{pad}\t{{");
+                    write_offset(s, &format!("{pad}\t"), *e);
+                    let _ = writeln!(s, "{pad}\t}}");
+                }
+                let _ = writeln!(s, "{pad}}}");
+                continue;
+            }
+            order.push(j);
+            let keyword = if joint.parent.is_none() {
+                "ROOT"
+            } else {
+                "JOINT"
+            };
+            let _ = writeln!(s, "{pad}{keyword} {}\n{pad}{{", joint.name);
+            write_offset(s, &pad, joint.offset);
+            let _ = write!(s, "{pad}\tCHANNELS {}", joint.channels.len());
+            for c in &joint.channels {
+                let _ = write!(s, " {}", c.name());
+            }
+            s.push('\n');
+            stack.push((j, depth, true));
+            stack.extend(children[j].iter().rev().map(|&c| (c, depth + 1, false)));
         }
-        s.push('\n');
-        for &c in &children[j] {
-            self.write_joint(s, c, depth + 1, children, order);
-        }
-        for e in &joint.end_sites {
-            let _ = writeln!(s, "{pad}\tEnd Site\n{pad}\t{{");
-            write_offset(s, &format!("{pad}\t"), *e);
-            let _ = writeln!(s, "{pad}\t}}");
-        }
-        let _ = writeln!(s, "{pad}}}");
     }
 }
+
+/// Deepest indentation [`Bvh::write_to`] writes, in tabs: deeper joints are written at
+/// this depth (readers ignore indentation; a 100 000-joint chain would otherwise be
+/// gigabytes of tabs).
+const MAX_INDENT: usize = 32;
 
 fn write_offset(s: &mut String, pad: &str, o: [f64; 3]) {
     let _ = write!(s, "{pad}\tOFFSET");
@@ -512,6 +528,9 @@ impl Parser<'_, '_> {
     fn parse(mut self) -> Result<Bvh, MotionError> {
         self.expect("HIERARCHY", "at the start of a BVH file")?;
         let mut joints: Vec<BvhJoint> = Vec::new();
+        // Names seen so far, so that checking a new one is one lookup, not a scan of
+        // every joint before it (which made 100 000 joints take half a minute).
+        let mut names: HashSet<&str> = HashSet::new();
         let mut stack: Vec<Open> = Vec::new();
         loop {
             let Some((tok, line)) = self.cursor.token() else {
@@ -544,7 +563,7 @@ impl Parser<'_, '_> {
                     if name.ends_with('{') {
                         return Err(self.err(line, format!("joint name '{name}' ends with '{{'; expected a name, then one '{{' opening the joint's block")));
                     }
-                    if joints.iter().any(|j| j.name == name) {
+                    if !names.insert(name) {
                         return Err(self.err(line, format!("a second joint named '{name}'; BVH joint names must be unique")));
                     }
                     if !brace_on_line {

@@ -17,7 +17,8 @@
 //!   arms, twist, bow), within [`JOINT_LIMITS_DEG`];
 //! - [`resample`] to another frame rate, [`pose_history`] for seed 000's Θᵗ,
 //!   [`motion_stats`] for summaries;
-//! - [`read_motion`] / [`write_motion`] pick the format by extension.
+//! - [`read_motion`] / [`write_motion`] pick the format by extension; [`load_motion`] is
+//!   how every command reads a motion file for the body it drives (up axis, frame rate).
 //!
 //! See `docs/motions.md` for the formats, conventions and methods in one place.
 
@@ -41,10 +42,14 @@ mod types;
 
 pub use amass::{
     amass_from_npz, amass_npz, read_amass, write_amass, AmassOptions, AmassReport, PoseLayout,
+    UpFrom, UP_AXIS_KEY,
 };
 pub use bvh::{Bvh, BvhJoint, Channel, RestPositions};
 pub use error::MotionError;
-pub use file::{read_motion, write_motion, MotionFileOptions, MotionFormat, MotionSource};
+pub use file::{
+    body_rest_joints, load_motion, read_motion, write_motion, LoadedMotion, MotionFileOptions,
+    MotionFormat, MotionSource,
+};
 pub use fk::posed_joints;
 pub use history::{
     pose_features, pose_histories, pose_history, HISTORY_FEATURES, MAX_HISTORY_VALUES,

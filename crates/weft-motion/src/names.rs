@@ -12,6 +12,7 @@
 //! are simply not used; several source joints between two mapped ones (CMU's `Neck1`,
 //! MPFB's five spine bones) still count, because retargeting works on global rotations.
 
+use std::collections::HashMap;
 use std::path::Path;
 
 use super::error::MotionError;
@@ -232,6 +233,10 @@ pub struct NameMap {
     label: String,
     /// `(normalized source name, source name as given, SMPL index)`.
     entries: Vec<(String, String, usize)>,
+    /// Normalized source name → its first entry, so a lookup is one hash, not a scan
+    /// (a BVH file of many joints against a large map file would otherwise be
+    /// quadratic).
+    index: HashMap<String, usize>,
 }
 
 impl NameMap {
@@ -244,9 +249,18 @@ impl NameMap {
                 smpl_joint_index(smpl).map(|j| (normalize_joint_name(&src), src, j))
             })
             .collect();
+        NameMap::with_entries(preset.name(), entries)
+    }
+
+    fn with_entries(label: &str, entries: Vec<(String, String, usize)>) -> NameMap {
+        let mut index = HashMap::with_capacity(entries.len());
+        for (i, e) in entries.iter().enumerate() {
+            index.entry(e.0.clone()).or_insert(i);
+        }
         NameMap {
-            label: preset.name().to_owned(),
+            label: label.to_owned(),
             entries,
+            index,
         }
     }
 
@@ -259,6 +273,7 @@ impl NameMap {
         B: AsRef<str>,
     {
         let mut entries: Vec<(String, String, usize)> = Vec::new();
+        let mut seen: HashMap<String, usize> = HashMap::new();
         for (src, smpl) in pairs {
             let (src, smpl) = (src.as_ref(), smpl.as_ref());
             let j = smpl_joint_index(smpl).ok_or_else(|| {
@@ -268,7 +283,7 @@ impl NameMap {
                 )
             })?;
             let key = normalize_joint_name(src);
-            if let Some((_, other, k)) = entries.iter().find(|e| e.0 == key) {
+            if let Some((_, other, k)) = seen.get(&key).map(|&i| &entries[i]) {
                 if *k != j {
                     return Err(format!(
                         "'{src}' and '{other}' name the same joint (names compare without case and namespace prefix) but map to '{}' and '{smpl}'",
@@ -277,15 +292,13 @@ impl NameMap {
                 }
                 continue;
             }
+            seen.insert(key.clone(), entries.len());
             entries.push((key, src.to_owned(), j));
         }
         if entries.is_empty() {
             return Err("the map is empty; expected entries like Hips = \"pelvis\"".into());
         }
-        Ok(NameMap {
-            label: label.to_owned(),
-            entries,
-        })
+        Ok(NameMap::with_entries(label, entries))
     }
 
     /// Reads a map file: TOML (`.toml`, `Hips = "pelvis"` per line, quote names with
@@ -351,7 +364,7 @@ impl NameMap {
     /// The SMPL joint a BVH joint name maps to.
     pub fn lookup(&self, bvh_name: &str) -> Option<usize> {
         let key = normalize_joint_name(bvh_name);
-        self.entries.iter().find(|e| e.0 == key).map(|e| e.2)
+        self.index.get(&key).map(|&i| self.entries[i].2)
     }
 
     /// The source names the map knows for SMPL joint `smpl`, for messages.

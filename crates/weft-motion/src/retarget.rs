@@ -59,6 +59,23 @@ pub enum UpAxis {
 }
 
 impl UpAxis {
+    /// "Y" or "Z".
+    pub fn name(self) -> &'static str {
+        match self {
+            UpAxis::Y => "Y",
+            UpAxis::Z => "Z",
+        }
+    }
+
+    /// The axis named `y` or `z` (any case).
+    pub fn parse(name: &str) -> Option<UpAxis> {
+        match name.to_ascii_lowercase().as_str() {
+            "y" => Some(UpAxis::Y),
+            "z" => Some(UpAxis::Z),
+            _ => None,
+        }
+    }
+
     /// The rotation taking this frame's coordinates to weft's Y-up frame.
     pub fn to_y_up(self) -> UnitQuaternion<f64> {
         match self {

@@ -30,7 +30,7 @@ fn npz_round_trip_is_exact_to_storage_precision() {
     let m = dance(30);
     for up in [UpAxis::Z, UpAxis::Y] {
         let options = AmassOptions {
-            up,
+            up: Some(up),
             ..AmassOptions::default()
         };
         let path = dir.path("m.npz");
@@ -155,7 +155,7 @@ fn smplx_and_split_layouts_read() {
     w.add("betas", &[1, 10], &[0.1f32; 10]).unwrap();
     w.write(&path).unwrap();
     let options = AmassOptions {
-        up: UpAxis::Y,
+        up: Some(UpAxis::Y),
         ..AmassOptions::default()
     };
     let (m, r) = read_amass(&path, &options).unwrap();
@@ -355,14 +355,161 @@ fn the_writer_stores_amass_keys_and_dtypes() {
     let mut npz = weft_mesh::io::npz::Npz::open(&path).unwrap();
     assert_eq!(
         npz.keys(),
-        vec!["betas", "mocap_framerate", "poses", "trans"]
+        vec!["betas", "mocap_framerate", "poses", "trans", "weft_up_axis"]
     );
-    for key in ["betas", "mocap_framerate", "poses", "trans"] {
+    for key in ["betas", "mocap_framerate", "poses", "trans", "weft_up_axis"] {
         assert_eq!(npz.describe(key).unwrap().0, "<f8", "{key}");
     }
+    // The up axis is recorded as a plain float64 direction: Z, as AMASS.
+    assert_eq!(
+        npz.floats("weft_up_axis", &[Some(3)]).unwrap().data,
+        vec![0.0, 0.0, 1.0]
+    );
     assert_eq!(npz.describe("poses").unwrap().1, vec![3, 72]);
     assert_eq!(
         npz.describe("mocap_framerate").unwrap().1,
         Vec::<usize>::new()
     );
+}
+
+/// Issue 17 item 10: `weft motion generate --npz-up y` wrote a file that every reader
+/// took for Z up, so the body came back lying on its back. Files record their axis now.
+#[test]
+fn a_file_records_its_up_axis_and_reads_back_upright() {
+    use weft_motion::{UpFrom, UP_AXIS_KEY};
+    let dir = TempDir::new("npz", "up");
+    let m = dance(12);
+    for up in [UpAxis::Y, UpAxis::Z] {
+        let path = dir.path("m.npz");
+        write_motion(
+            &path,
+            &m,
+            &MotionFileOptions {
+                npz_up: Some(up),
+                ..MotionFileOptions::default()
+            },
+        )
+        .unwrap();
+        // Read without saying which axis: the recorded one.
+        let (back, report) = read_amass(&path, &AmassOptions::default()).unwrap();
+        assert_eq!((report.up, report.up_from), (up, UpFrom::Recorded));
+        assert!(report.unused_keys.is_empty(), "{:?}", report.unused_keys);
+        assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+        let d = back.distance(&m).unwrap();
+        assert!(d.rotation < 1e-6 && d.translation < 1e-6, "{up:?}: {d:?}");
+        // A given axis overrides the recorded one, with a warning.
+        let other = if up == UpAxis::Y {
+            UpAxis::Z
+        } else {
+            UpAxis::Y
+        };
+        let (turned, report) = read_amass(
+            &path,
+            &AmassOptions {
+                up: Some(other),
+                ..AmassOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!((report.up, report.up_from), (other, UpFrom::Given));
+        assert!(report.warnings[0].contains("read"), "{:?}", report.warnings);
+        assert!(turned.distance(&m).unwrap().rotation > 1.0);
+    }
+
+    // A Y-up file that records nothing (another tool's) is read Z up, as AMASS, and
+    // the report says the body lies down and how to read it.
+    let y_up = amass_npz(
+        &m,
+        &AmassOptions {
+            up: Some(UpAxis::Y),
+            ..AmassOptions::default()
+        },
+    )
+    .unwrap()
+    .to_bytes()
+    .unwrap();
+    let path = dir.path("y.npz");
+    std::fs::write(&path, &y_up).unwrap();
+    let mut src = weft_mesh::io::npz::Npz::open(&path).unwrap();
+    let mut w = NpzWriter::new(false);
+    for key in src.keys() {
+        if key != UP_AXIS_KEY {
+            let shape: Vec<Option<usize>> = src
+                .describe(&key)
+                .unwrap()
+                .1
+                .into_iter()
+                .map(Some)
+                .collect();
+            let a = src.floats(&key, &shape).unwrap();
+            w.add(&key, &a.shape, &a.data).unwrap();
+        }
+    }
+    let bare = dir.path("bare.npz");
+    w.write(&bare).unwrap();
+    let (_, report) = read_amass(&bare, &AmassOptions::default()).unwrap();
+    assert_eq!((report.up, report.up_from), (UpAxis::Z, UpFrom::Default));
+    assert!(
+        report.warnings.len() == 1 && report.warnings[0].contains("--up y"),
+        "{:?}",
+        report.warnings
+    );
+    // A Z-up capture (the dance written as AMASS is) draws no such warning.
+    let z = dir.path("z.npz");
+    write_amass(&z, &m, &AmassOptions::default()).unwrap();
+    assert!(read_amass(&z, &AmassOptions::default())
+        .unwrap()
+        .1
+        .warnings
+        .is_empty());
+
+    // A recorded axis that is neither Y nor Z is refused, naming the key.
+    let mut w = NpzWriter::new(false);
+    w.add("poses", &[1, 72], &[0.0f64; 72]).unwrap();
+    w.add("trans", &[1, 3], &[0.0f64; 3]).unwrap();
+    w.add("mocap_framerate", &[], &[30.0f64]).unwrap();
+    w.add(UP_AXIS_KEY, &[3], &[1.0f64, 0.0, 0.0]).unwrap();
+    let odd = dir.path("odd.npz");
+    w.write(&odd).unwrap();
+    let e = read_amass(&odd, &AmassOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("weft_up_axis") && e.contains("[0, 1, 0] for Y up"),
+        "{e}"
+    );
+}
+
+/// Issue 17 item 11: a frame rate given with a motion file was silently ignored. The
+/// one reading path resamples to it, and says so.
+#[test]
+fn load_motion_resamples_to_the_rate_asked_for() {
+    use weft_motion::load_motion;
+    let dir = TempDir::new("npz", "fps");
+    let mut p = ProceduralParams::new(MotionKind::Walk);
+    p.frames = 25;
+    p.fps = 120.0;
+    let m = generate(&p).unwrap();
+    let path = dir.path("walk120.npz");
+    write_motion(&path, &m, &MotionFileOptions::default()).unwrap();
+    let options = MotionFileOptions::default();
+    let kept = load_motion(&path, &options, None).unwrap();
+    assert_eq!((kept.motion.fps(), kept.resampled_from), (120.0, None));
+    let same = load_motion(&path, &options, Some(120.0)).unwrap();
+    assert_eq!(same.resampled_from, None);
+    let at30 = load_motion(&path, &options, Some(30.0)).unwrap();
+    assert_eq!(at30.motion.fps(), 30.0);
+    assert_eq!(at30.motion.frame_count(), 7); // 24/120 s = 0.2 s: frames at 0…6/30
+    assert_eq!(at30.resampled_from, Some((120.0, 25)));
+    // Frame 1 at 30 fps is frame 4 at 120 (the root went through the Z-up file).
+    assert_eq!(at30.motion.poses()[1][1..], m.poses()[4][1..]);
+    // A file without a frame rate is taken to run at the rate given.
+    let mut w = NpzWriter::new(false);
+    w.add("poses", &[2, 72], &[0.0f64; 144]).unwrap();
+    w.add("trans", &[2, 3], &[0.0f64; 6]).unwrap();
+    let bare = dir.path("no-rate.npz");
+    w.write(&bare).unwrap();
+    let got = load_motion(&bare, &options, Some(50.0)).unwrap();
+    assert_eq!((got.motion.fps(), got.resampled_from), (50.0, None));
+    assert!(load_motion(&bare, &options, None).is_err());
 }

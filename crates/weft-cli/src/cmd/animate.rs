@@ -8,12 +8,13 @@ use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
 use weft_body::PosedSequence;
-use weft_eval::animate::{animate, push_out_of_body, write_animation, MotionSpec};
+use weft_eval::animate::{animate, push_out_of_body, write_animation};
 use weft_mesh::export::ExportFormat;
 use weft_models::load_deformer;
 
 use super::body_args::BodyArgs;
 use super::emit;
+use super::motion_args::MotionArgs;
 
 #[derive(Args)]
 pub struct AnimateArgs {
@@ -26,19 +27,11 @@ pub struct AnimateArgs {
     garment: PathBuf,
     #[command(flatten)]
     body: BodyArgs,
-    /// The motion: an AMASS .npz or .bvh file, or a procedural name (walk, run, jump,
-    /// dance, kick, …).
-    #[arg(long, value_name = "FILE|NAME")]
-    motion: String,
+    #[command(flatten)]
+    motion: MotionArgs,
     /// Procedural motions: number of frames.
     #[arg(long, default_value_t = 120)]
     frames: usize,
-    /// Procedural motions: seed of the variations.
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
-    /// Procedural motions: frames per second.
-    #[arg(long, default_value_t = 30.0)]
-    fps: f64,
     /// Output: a directory for obj, a file otherwise.
     #[arg(long, value_name = "PATH")]
     out: PathBuf,
@@ -68,9 +61,9 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let garment = weft_mesh::read_mesh(&args.garment)
         .with_context(|| format!("reading the garment {}", args.garment.display()))?;
     let (body, _) = args.body.load()?;
-    let betas: Vec<f32> = args.body.betas(&body)?.iter().map(|&b| b as f32).collect();
-    let motion =
-        MotionSpec::parse(&args.motion, args.frames, args.seed, args.fps)?.load(&body, &betas)?;
+    let betas64 = args.body.betas(&body)?;
+    let betas: Vec<f32> = betas64.iter().map(|&b| b as f32).collect();
+    let motion = args.motion.load(&body, &betas64, args.frames)?;
     let started = Instant::now();
     let mut frames = animate(deformer.as_ref(), &garment, &body, &betas, &motion)?;
     let seconds = started.elapsed().as_secs_f64();

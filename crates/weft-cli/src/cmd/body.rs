@@ -9,10 +9,11 @@ use weft_body::joints::{SMPL_JOINT_COUNT, SMPL_JOINT_NAMES};
 use weft_body::mpfb::{import_mpfb, ImportOptions, RestPose};
 use weft_body::{BodyModel, Skinning};
 use weft_mesh::io::write_mesh;
-use weft_motion::{read_motion, MotionFileOptions, MotionSource};
+use weft_motion::MotionSource;
 
 use super::body_args::{BodyArgs, BodyModelArg};
 use super::emit;
+use super::motion_args::MotionFileArgs;
 
 #[derive(Subcommand)]
 pub enum BodyCommand {
@@ -60,9 +61,8 @@ enum SkinningArg {
 pub struct PoseArgs {
     #[command(flatten)]
     body: BodyArgs,
-    /// The motion: AMASS-style .npz or .bvh (see `weft motion`).
-    #[arg(long, value_name = "FILE")]
-    motion: PathBuf,
+    #[command(flatten)]
+    motion: MotionFileArgs,
     /// The frame to write (0-based).
     #[arg(long, default_value_t = 0, conflicts_with = "all_frames")]
     frame: usize,
@@ -232,7 +232,8 @@ fn export(args: &ExportArgs) -> Result<()> {
 
 fn pose(args: &PoseArgs) -> Result<()> {
     let (model, _) = args.body.load()?;
-    let shaped = model.shaped(&args.body.betas(&model)?)?;
+    let betas = args.body.betas(&model)?;
+    let shaped = model.shaped(&betas)?;
     if model.joint_count() != SMPL_JOINT_COUNT {
         bail!(
             "{}: the body has {} joints; posing with a motion needs SMPL's {SMPL_JOINT_COUNT}",
@@ -240,13 +241,8 @@ fn pose(args: &PoseArgs) -> Result<()> {
             model.joint_count()
         );
     }
-    let mut rest = [[0.0; 3]; SMPL_JOINT_COUNT];
-    rest.copy_from_slice(&shaped.joints);
-    let options = MotionFileOptions {
-        rest_joints: rest,
-        ..MotionFileOptions::default()
-    };
-    let (motion, source) = read_motion(&args.motion, &options)?;
+    let read = args.motion.load(&model, &betas)?;
+    let (motion, source, path) = (read.motion, read.source, &args.motion.motion);
     let method = match args.skinning {
         SkinningArg::Lbs => Skinning::Lbs,
         SkinningArg::Dqs => Skinning::Dqs,
@@ -258,7 +254,7 @@ fn pose(args: &PoseArgs) -> Result<()> {
         if args.frame >= n {
             bail!(
                 "{}: frame {} asked for but the motion has {n} frames (0…{})",
-                args.motion.display(),
+                path.display(),
                 args.frame,
                 n - 1
             );
@@ -297,7 +293,7 @@ fn pose(args: &PoseArgs) -> Result<()> {
     };
     emit(&format!(
         "{} ({what}, {n} frames at {} fps): wrote {target} ({} skinning)",
-        args.motion.display(),
+        path.display(),
         motion.fps(),
         method
     ))
@@ -389,7 +385,7 @@ fn import(args: &ImportArgs) -> Result<()> {
 mod tests {
     use super::*;
     use weft_mesh::io::read_mesh;
-    use weft_motion::{generate, write_motion, MotionKind, ProceduralParams};
+    use weft_motion::{generate, write_motion, MotionFileOptions, MotionKind, ProceduralParams};
 
     fn temp(tag: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!("weft-cli-body-{tag}-{}", std::process::id()));
@@ -456,7 +452,11 @@ mod tests {
         .unwrap();
         let args = |frame, all, out: PathBuf| PoseArgs {
             body: default_body(&[0.0]),
-            motion: motion_path.clone(),
+            motion: MotionFileArgs {
+                motion: motion_path.clone(),
+                up: None,
+                fps: None,
+            },
             frame,
             all_frames: all,
             skinning: SkinningArg::Dqs,

@@ -12,6 +12,7 @@ mod export;
 mod garment;
 mod mesh;
 mod motion;
+mod motion_args;
 mod render;
 mod simulate;
 mod train;
@@ -97,5 +98,59 @@ pub fn emit(text: &str) -> anyhow::Result<()> {
     match written.and_then(|()| stdout.flush()) {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
         _ => Ok(()),
+    }
+}
+
+/// The value parser of every `--fps`: a frame rate above 0 and at most
+/// [`weft_motion::MAX_FPS`], refused by clap naming the flag (`invalid value '-3' for
+/// '--fps <FPS>': …`) rather than later by the motion code in words that name none.
+pub fn frame_rate(text: &str) -> Result<f64, String> {
+    let fps: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
+    if fps.is_finite() && fps > 0.0 && fps <= weft_motion::MAX_FPS {
+        Ok(fps)
+    } else {
+        Err(format!(
+            "expected frames per second above 0 and at most {}",
+            weft_motion::MAX_FPS
+        ))
+    }
+}
+
+/// The value parser of a frame count: 1 to [`weft_motion::MAX_FRAMES`].
+pub fn frame_count(text: &str) -> Result<usize, String> {
+    let n: usize = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a whole number"))?;
+    if (1..=weft_motion::MAX_FRAMES).contains(&n) {
+        Ok(n)
+    } else {
+        Err(format!("expected 1 to {} frames", weft_motion::MAX_FRAMES))
+    }
+}
+
+/// The value parser of a finite number above 0 (a scale, a speed).
+pub fn positive(text: &str) -> Result<f64, String> {
+    let x: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err("expected a finite number above 0".into())
+    }
+}
+
+/// The value parser of a procedural motion's amplitude: 0 to
+/// [`weft_motion::MAX_AMPLITUDE`].
+pub fn amplitude(text: &str) -> Result<f64, String> {
+    let x: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number"))?;
+    if x.is_finite() && (0.0..=weft_motion::MAX_AMPLITUDE).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("expected 0 to {}", weft_motion::MAX_AMPLITUDE))
     }
 }

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use weft_body::joints::SMPL_JOINT_COUNT;
 use weft_motion::{
-    generate, motion_stats, read_motion, write_motion, BvhUnits, MapChoice, MotionFileOptions,
+    generate, load_motion, motion_stats, write_motion, BvhUnits, MapChoice, MotionFileOptions,
     MotionFormat, MotionKind, MotionSource, NameMap, ProceduralParams, SkeletonPreset, UpAxis,
 };
 
@@ -46,20 +46,20 @@ pub struct GenerateArgs {
     #[arg(long, value_parser = parse_kind)]
     kind: MotionKind,
     /// Number of frames.
-    #[arg(long, default_value_t = 120)]
+    #[arg(long, default_value_t = 120, value_parser = super::frame_count)]
     frames: usize,
     /// Frames per second.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, value_parser = super::frame_rate)]
     fps: f64,
     /// Seed of the small random variations (phase, tempo, amplitude, posture).
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Forward speed in m/s for walk (default 1.2) and run (default 3.0); a tempo factor
     /// for the other kinds (default 1).
-    #[arg(long)]
+    #[arg(long, value_parser = super::positive)]
     speed: Option<f64>,
     /// Scales every joint excursion; 1 is natural, 0 stands still, at most 3.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::amplitude)]
     amplitude: f64,
     /// Output file: .npz (AMASS layout) or .bvh (SMPL skeleton, metres, Y up).
     #[arg(long)]
@@ -102,10 +102,11 @@ pub struct InfoArgs {
     map: Option<String>,
     /// BVH length unit in metres per file unit (0.01 for centimetres); default: guessed
     /// from the skeleton's size.
-    #[arg(long)]
+    #[arg(long, value_parser = super::positive)]
     scale: Option<f64>,
-    /// Frame rate for an .npz that records none.
-    #[arg(long)]
+    /// Frames per second: a file recording another rate is resampled to it (said on
+    /// stderr), an .npz recording none is taken to run at it.
+    #[arg(long, value_parser = super::frame_rate)]
     fps: Option<f64>,
     #[command(flatten)]
     body: BodyArgs,
@@ -136,9 +137,13 @@ fn generate_cmd(args: &GenerateArgs) -> Result<()> {
         speed: args.speed,
         amplitude: args.amplitude,
     };
-    let motion = generate(&params).with_context(|| format!("generating {}", args.kind))?;
+    // What the parsers cannot know is the kind's own speed range.
+    let motion = generate(&params).with_context(|| match args.speed {
+        Some(s) => format!("--speed {s} for {}", args.kind),
+        None => format!("generating {}", args.kind),
+    })?;
     let options = MotionFileOptions {
-        npz_up: args.npz_up.into(),
+        npz_up: Some(args.npz_up.into()),
         rest_joints: rest_joints(&args.body)?,
         ..MotionFileOptions::default()
     };
@@ -164,13 +169,12 @@ fn generate_cmd(args: &GenerateArgs) -> Result<()> {
 fn info(args: &InfoArgs) -> Result<()> {
     let format = MotionFormat::from_path(&args.file)?;
     let mut options = MotionFileOptions {
-        fps_if_missing: args.fps,
         rest_joints: rest_joints(&args.body)?,
         ..MotionFileOptions::default()
     };
     if let Some(up) = args.up {
         match format {
-            MotionFormat::Npz => options.npz_up = up.into(),
+            MotionFormat::Npz => options.npz_up = Some(up.into()),
             MotionFormat::Bvh => options.bvh_up = up.into(),
         }
     }
@@ -183,21 +187,19 @@ fn info(args: &InfoArgs) -> Result<()> {
     if let Some(scale) = args.scale {
         options.bvh_units = BvhUnits::MetresPerUnit(scale);
     }
-    let (motion, source) = read_motion(&args.file, &options)?;
+    let read = load_motion(&args.file, &options, args.fps)?;
+    // Notes and warnings go to stderr, so stdout stays one parseable report.
+    super::motion_args::report(&args.file, &read);
+    let (motion, source) = (read.motion, read.source);
     let stats = motion_stats(&motion);
-
-    // Warnings go to stderr, so stdout stays one parseable report.
-    if let MotionSource::Bvh(r) = &source {
-        for w in &r.warnings {
-            eprintln!("warning: {}: {w}", args.file.display());
-        }
-    }
 
     if args.json {
         let source_json = match &source {
             MotionSource::Amass(r) => json!({
                 "format": "npz",
                 "layout": r.layout.name(),
+                "up": r.up.name(),
+                "up_from": r.up_from.phrase(),
                 "frame_rate_key": r.frame_rate_key,
                 "dropped_joints": r.dropped_joints,
                 "unused_keys": r.unused_keys,
@@ -238,10 +240,11 @@ fn info(args: &InfoArgs) -> Result<()> {
     match &source {
         MotionSource::Amass(r) => writeln!(
             out,
-            "{}: AMASS-style npz, {} poses, file {} up (read as Y up)",
+            "{}: AMASS-style npz, {} poses, file {} up ({}; read as Y up)",
             args.file.display(),
             r.layout.name(),
-            up_name(options.npz_up)
+            up_name(r.up),
+            r.up_from.phrase()
         )?,
         MotionSource::Bvh(r) => writeln!(
             out,

@@ -7,10 +7,8 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
-use weft_body::BodyModel;
 use weft_mesh::export::{remove_obj_sequence, write_obj_sequence, write_pc2, Frames, Pc2Timing};
 use weft_mesh::io::{load_mesh, write_atomic};
-use weft_motion::{generate, read_motion, Motion, MotionFileOptions, MotionKind, ProceduralParams};
 use weft_sim::{
     simulate_sequence, Attachment, FrameStats, Material, SequenceError, SequenceOptions,
     SequenceProgress, SimulatedSequence,
@@ -18,6 +16,7 @@ use weft_sim::{
 
 use super::body_args::BodyArgs;
 use super::emit;
+use super::motion_args::MotionArgs;
 
 #[derive(Args)]
 pub struct SimulateArgs {
@@ -27,10 +26,8 @@ pub struct SimulateArgs {
     garment: PathBuf,
     #[command(flatten)]
     body: BodyArgs,
-    /// The motion: an .npz (AMASS layout) or .bvh file, or a procedural motion name
-    /// (walk, run, jump, dance, kick, raise-arms, twist, bow).
-    #[arg(long, value_name = "FILE|NAME")]
-    motion: String,
+    #[command(flatten)]
+    motion: MotionArgs,
     /// Output directory (created): frames.pc2, frames.npy, stats.json, obj/ with --obj.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
@@ -47,12 +44,6 @@ pub struct SimulateArgs {
     /// Warm-up frames before the first output frame (rest pose → first pose).
     #[arg(long)]
     warmup: Option<usize>,
-    /// Seed of a procedural motion.
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
-    /// Frame rate of a procedural motion.
-    #[arg(long, default_value_t = 30.0)]
-    fps: f64,
     /// Also write an OBJ sequence to DIR/obj/.
     #[arg(long)]
     obj: bool,
@@ -79,7 +70,11 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         .mesh;
     let (model, _) = args.body.load()?;
     let betas = args.body.betas(&model)?;
-    let motion = load_motion(args, &model, &betas)?;
+    let motion = args.motion.load(
+        &model,
+        &betas,
+        args.frames.unwrap_or(DEFAULT_PROCEDURAL_FRAMES),
+    )?;
     let mut opts = SequenceOptions {
         max_frames: args.frames,
         attachment: match args.attach {
@@ -144,7 +139,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         garment: &args.garment,
         body: model.source(),
         material: material.name,
-        motion: &args.motion,
+        motion: &args.motion.motion,
         fps: motion.fps(),
         substeps: opts.substeps,
         warmup: opts.warmup_frames,
@@ -187,41 +182,6 @@ struct Info<'a> {
     fps: f64,
     substeps: usize,
     warmup: usize,
-}
-
-fn load_motion(args: &SimulateArgs, model: &BodyModel, betas: &[f64]) -> Result<Motion> {
-    let path = Path::new(&args.motion);
-    let is_file = path.exists()
-        || matches!(
-            path.extension().and_then(|e| e.to_str()),
-            Some("npz" | "bvh" | "NPZ" | "BVH")
-        );
-    if is_file {
-        let joints = model.joints(betas)?;
-        let rest_joints = joints.try_into().map_err(|j: Vec<[f64; 3]>| {
-            anyhow::anyhow!("the body has {} joints; motions drive SMPL's 24", j.len())
-        })?;
-        let options = MotionFileOptions {
-            rest_joints,
-            ..MotionFileOptions::default()
-        };
-        let (motion, _) = read_motion(path, &options)
-            .with_context(|| format!("reading the motion {}", path.display()))?;
-        return Ok(motion);
-    }
-    let Some(kind) = MotionKind::parse(&args.motion) else {
-        bail!(
-            "--motion {:?} is neither a motion file (.npz, .bvh) nor a procedural motion (walk, run, jump, dance, kick, raise-arms, twist, bow)",
-            args.motion
-        );
-    };
-    let params = ProceduralParams {
-        frames: args.frames.unwrap_or(DEFAULT_PROCEDURAL_FRAMES),
-        fps: args.fps,
-        seed: args.seed,
-        ..ProceduralParams::new(kind)
-    };
-    generate(&params).with_context(|| format!("generating {kind}"))
 }
 
 fn totals(seq: &SimulatedSequence) -> serde_json::Value {
