@@ -373,11 +373,12 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("weft-render-img-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("missing/out.png");
-        let e = Image::new(2, 2, [0; 3]).write_png(&path).unwrap_err();
-        assert!(e.to_string().contains("missing/out.png"), "{e}");
         let ok = dir.join("ok.png");
         Image::new(2, 2, [0; 3]).write_png(&ok).unwrap();
+        // A parent that is a file (missing parents are created, see write_atomic).
+        let path = ok.join("out.png");
+        let e = Image::new(2, 2, [0; 3]).write_png(&path).unwrap_err();
+        assert!(e.to_string().contains("ok.png/out.png"), "{e}");
         let names: Vec<_> = std::fs::read_dir(&dir)
             .unwrap()
             .map(|e| e.unwrap().file_name())
