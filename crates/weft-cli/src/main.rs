@@ -28,11 +28,9 @@ fn main() -> ExitCode {
             err.exit()
         }
         Err(err) => {
-            // clap's message is its first line (`error: …`, naming the argument); the
-            // usage block after it is replaced by a pointer to --help, so every error
-            // of weft is one line.
-            // The message is the lines before the first blank one (a missing argument's
-            // names are on the lines after `error: the following required …:`).
+            // One line: clap's message (the lines before its first blank one, which
+            // name the argument, also a missing one's) joined, and a pointer to --help
+            // instead of the usage block that follows.
             let text = err.to_string();
             let message: Vec<&str> = text
                 .lines()
