@@ -382,12 +382,13 @@ impl DataConfig {
     /// overlap is checked on the resolved plan ([`crate::plan::Plan::new`]), where
     /// derived seeds and drawn shapes are known.
     pub fn validate(&self) -> Result<(), DataError> {
-        if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= 1000.0) {
+        if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= weft_motion::MAX_FPS) {
             return Err(DataError::config(
                 "fps",
                 format!(
-                    "{}; expected a frame rate above 0 and at most 1000",
-                    self.fps
+                    "{}; expected a frame rate above 0 and at most {}",
+                    self.fps,
+                    weft_motion::MAX_FPS
                 ),
             ));
         }
@@ -400,10 +401,14 @@ impl DataConfig {
                 format!("{}; expected 1 to 100", self.substeps),
             ));
         }
-        if self.warmup_frames > 10_000 {
+        if self.warmup_frames > weft_sim::MAX_WARMUP_FRAMES {
             return Err(DataError::config(
                 "warmup_frames",
-                format!("{}; expected at most 10000", self.warmup_frames),
+                format!(
+                    "{}; expected at most {}",
+                    self.warmup_frames,
+                    weft_sim::MAX_WARMUP_FRAMES
+                ),
             ));
         }
         check_material("material", &self.material)?;
