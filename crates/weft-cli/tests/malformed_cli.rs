@@ -674,31 +674,7 @@ const SINGLE: &[(&str, &str, &str)] = &[
 
 /// Cases that fail today, by their command line exactly as in the tables (a table row's
 /// `{in}` replaced by `{m}/DIR/FILE`), with what goes wrong. Each is skipped until fixed.
-const KNOWN: &[(&str, &str)] = &[
-    // KNOWN: values checked by the library after parsing, named by the library's own
-    // word for them instead of the option.
-    ("simulate --garment {f}/garment.obj --motion walk --frames 0 --out {s}/sim", "`error: generating walk: 0 frames; expected 1 to 10000000`: names no option"),
-    ("simulate --garment {f}/garment.obj --motion walk --frames 1000000000 --out {s}/sim", "`error: generating walk: 1000000000 frames; expected 1 to 10000000`: names no option"),
-    ("simulate --garment {f}/garment.obj --motion walk --warmup 1000000000 --out {s}/sim", "`error: simulating …/garment.obj: warm-up frames = 1000000000: expected at most 10000 (MAX_WARMUP_FRAMES)`: not --warmup"),
-    ("simulate --garment {f}/garment.obj --motion walk --material kevlar --out {s}/sim", "`error: unknown material \"kevlar\"; expected one of: …`: names no option"),
-    ("animate {s}/no_run --garment {f}/garment.obj --motion walk --format fbx --out {s}/a.fbx", "`error: unknown export format `fbx`; …`: names no option"),
-    // KNOWN: animate and attribute check these options only after loading the run, so a
-    // bad value is reported as the run's error (or not at all with a good run).
-    ("animate {m}/run/no_checkpoint --garment {f}/garment.obj --motion walk --frames 0 --format obj --out {s}/animation", "reports the run's missing checkpoint, not --frames 0"),
-    ("animate {s}/no_run --garment {f}/garment.obj --motion walk --betas nan --format pc2 --out {s}/a.pc2", "reports the missing run, not --betas NaN"),
-    ("animate {s}/no_run --garment {f}/garment.obj --motion walk --frames 1000000000 --format pc2 --out {s}/a.pc2", "reports the missing run, not --frames 1000000000"),
-    ("animate {s}/no_run --garment {f}/garment.obj --motion moonwalk --format pc2 --out {s}/a.pc2", "reports the missing run, not --motion moonwalk"),
-    // KNOWN: a dataset config whose motion file is missing or malformed is not checked
-    // up front: every other sequence is simulated (seconds), a `sequence … failed` line
-    // is printed per failure, the summary goes to stdout and the dataset is left behind.
-    ("data generate --config {m}/config/data/motion_file_missing.toml --out {s}/dataset", "simulates the other splits, prints 4 lines and a summary on stdout, leaves dataset/"),
-    ("data generate --config {m}/config/data/motion_file_malformed.toml --out {s}/dataset", "simulates the other splits, prints 4 lines and a summary on stdout, leaves dataset/"),
-    // KNOWN: no upper bound checked up front: the command starts the work and runs on.
-    ("simulate --garment {f}/garment.obj --motion walk --substeps 1000000 --out {s}/sim", "starts simulating with a million sub-steps per frame (killed after the timeout)"),
-    // KNOWN: other.
-    ("simulate --garment {f}/garment.obj --body {m}/body/two_joints.npz --motion walk --frames 1 --out {s}/sim", "`error: simulating …/garment.obj: the body could not be posed: pose has 24 entries; expected one per joint (2)`: names the garment, not the body file"),
-    ("motion info {f}/walk.bvh --map nosuchpreset", "`error: nosuchpreset: No such file or directory (os error 2): No such file or directory (os error 2)`: an unknown preset is read as a file, the OS error twice, the presets not listed"),
-];
+const KNOWN: &[(&str, &str)] = &[];
 
 // ------------------------------------------------------------------------- the runner
 

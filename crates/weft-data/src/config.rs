@@ -395,10 +395,14 @@ impl DataConfig {
         if self.frames == 0 {
             return Err(DataError::config("frames", "0; expected at least 1 frame"));
         }
-        if !(1..=100).contains(&self.substeps) {
+        if !(1..=weft_sim::MAX_SUBSTEPS).contains(&self.substeps) {
             return Err(DataError::config(
                 "substeps",
-                format!("{}; expected 1 to 100", self.substeps),
+                format!(
+                    "{}; expected 1 to {}",
+                    self.substeps,
+                    weft_sim::MAX_SUBSTEPS
+                ),
             ));
         }
         if self.warmup_frames > weft_sim::MAX_WARMUP_FRAMES {

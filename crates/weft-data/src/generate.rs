@@ -248,6 +248,10 @@ pub fn generate(
         })?;
     let mut manifest = plan(config, model.num_betas(), model.source())?;
     manifest.job = options.job;
+    let owns = |i: usize| options.job.map_or(true, |j| j.owns(i));
+    // The motions before anything is written: a motion file that is missing, malformed
+    // or too short is the config's error, refused before hours of simulation.
+    let motions = build_motions(&manifest, &owns, config.fps, &model, out)?;
     let _locks = lock_output(out, options.job)?;
     for sub in ["", "garments", "shards", "stats"] {
         let d = out.join(sub);
@@ -259,7 +263,6 @@ pub fn generate(
             .job
             .map_or_else(|| MANIFEST_FILE.to_string(), |j| j.manifest_file()),
     );
-    let owns = |i: usize| options.job.map_or(true, |j| j.owns(i));
     let resumed = resume(&mut manifest, &manifest_path, out, &owns)?;
     let kept = resumed.kept;
     for (id, why) in &resumed.redone {
@@ -279,31 +282,10 @@ pub fn generate(
         .collect();
     let owned = manifest.sequences.iter().filter(|s| owns(s.index)).count();
 
-    // Motions and fitted bodies used by this run, built once each (file motions once
-    // per body, see `MotionKey`).
-    let mut motions: BTreeMap<MotionKey, Result<Motion, String>> = BTreeMap::new();
-    for &i in &pending {
-        let s = &manifest.sequences[i];
-        let key = motion_key(&manifest, s);
-        if let std::collections::btree_map::Entry::Vacant(slot) = motions.entry(key) {
-            let record = manifest
-                .motions
-                .iter()
-                .find(|m| m.id == s.motion_id)
-                .ok_or_else(|| DataError::UnknownId {
-                    kind: "motion",
-                    id: s.motion_id.clone(),
-                    dir: out.to_path_buf(),
-                })?;
-            let betas = betas_f64(&s.betas);
-            let built = build_motion(record, config.fps, &model, &betas);
-            slot.insert(built.map_err(|e| error_chain(&e)));
-        }
-    }
     // File motions learn their length here: fix the frame ranges of their sequences.
     for &i in &pending {
         let key = motion_key(&manifest, &manifest.sequences[i]);
-        if let Some(Ok(m)) = motions.get(&key) {
+        if let Some(m) = motions.get(&key) {
             let s = &mut manifest.sequences[i];
             s.frame_range[1] = s.frame_range[0] + m.frame_count();
         }
@@ -626,6 +608,38 @@ fn motion_key(manifest: &Manifest, s: &SequenceRecord) -> MotionKey {
     (s.motion_id.clone(), file.then(|| s.body_id.clone()))
 }
 
+/// The motions of the sequences `owns` picks, each built once (file motions once per
+/// body, see [`MotionKey`]) in parallel; the first that fails is the error (`out`: the
+/// dataset, for an id the plan lacks).
+fn build_motions(
+    manifest: &Manifest,
+    owns: &dyn Fn(usize) -> bool,
+    fps: f64,
+    model: &BodyModel,
+    out: &Path,
+) -> Result<BTreeMap<MotionKey, Motion>, DataError> {
+    let mut wanted: BTreeMap<MotionKey, (&MotionRecord, Vec<f64>)> = BTreeMap::new();
+    for s in manifest.sequences.iter().filter(|s| owns(s.index)) {
+        let key = motion_key(manifest, s);
+        if !wanted.contains_key(&key) {
+            let record = manifest
+                .motions
+                .iter()
+                .find(|m| m.id == s.motion_id)
+                .ok_or_else(|| DataError::UnknownId {
+                    kind: "motion",
+                    id: s.motion_id.clone(),
+                    dir: out.to_path_buf(),
+                })?;
+            wanted.insert(key, (record, betas_f64(&s.betas)));
+        }
+    }
+    wanted
+        .into_par_iter()
+        .map(|(key, (record, betas))| Ok((key, build_motion(record, fps, model, &betas)?)))
+        .collect()
+}
+
 /// The motion of a record at the dataset's frame rate, cut to its frames; a file is read
 /// for the body at shape `betas`.
 fn build_motion(
@@ -698,7 +712,7 @@ fn run_sequence(
     manifest: &Manifest,
     config: &DataConfig,
     model: &BodyModel,
-    motions: &BTreeMap<MotionKey, Result<Motion, String>>,
+    motions: &BTreeMap<MotionKey, Motion>,
     fits: &BTreeMap<String, Result<FitBody, String>>,
     out: &Path,
     simulator: &dyn SequenceSimulator,
@@ -715,10 +729,8 @@ fn run_sequence(
             frames: 0,
         })
     };
-    let motion = match motions.get(&motion_key(manifest, &r)) {
-        Some(Ok(m)) => m,
-        Some(Err(e)) => return fail(r, e.clone()),
-        None => return fail(r, format!("motion {} was not built", record.motion_id)),
+    let Some(motion) = motions.get(&motion_key(manifest, &r)) else {
+        return fail(r, format!("motion {} was not built", record.motion_id));
     };
     let fit = match fits.get(&r.body_id) {
         Some(Ok(f)) => f,

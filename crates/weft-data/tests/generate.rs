@@ -635,21 +635,22 @@ fn file_motions_are_resampled_and_windowed() {
     assert_eq!(r.motion_id, "m003-capture");
     assert_eq!((r.frame_range, r.frames), ([2, 6], 4));
     assert_eq!(ds.load(&r).unwrap().poses.len(), 4);
-    // A window past the end of the file fails that sequence, naming the frames.
+    // A window past the end of the file is refused before anything is written, naming
+    // the motion and the frames.
     c.test.motions[0].frames = Some(40);
     let out = dir.join("out2");
-    let report = generate(
+    let err = generate(
         &c,
         &out,
         &GenerateOptions::default(),
         &FakeSim::new(),
         &Silent,
     )
-    .unwrap();
-    assert_eq!(report.failed.len(), 1);
+    .unwrap_err();
+    let message = format!("{err:#}");
     assert!(
-        report.failed[0].1.contains("frames 2..42"),
-        "{:?}",
-        report.failed
+        message.contains("m003-capture") && message.contains("frames 2..42"),
+        "{message}"
     );
+    assert!(!out.exists());
 }

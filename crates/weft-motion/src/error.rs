@@ -8,8 +8,9 @@ use std::path::PathBuf;
 /// What went wrong reading, converting, generating or writing a motion.
 #[derive(Debug, thiserror::Error)]
 pub enum MotionError {
-    /// The file could not be opened, read or written.
-    #[error("{}: {source}", .path.display())]
+    /// The file could not be opened, read or written. The operating system's reason is
+    /// the error's `source()`, so a cause-chain printer shows it once.
+    #[error("{}: cannot access the file", .path.display())]
     Io {
         /// The file.
         path: PathBuf,

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
     /// The output file could not be written (nothing partial is left behind).
-    #[error("{}: {source}", .path.display())]
+    #[error("{}: cannot write the file", .path.display())]
     Io {
         /// The file.
         path: PathBuf,

@@ -59,7 +59,7 @@ pub use penalties::{LinearCollision, UvShear, UvStretch};
 pub use potential::{IncrementalPotential, Term, WeightedTerm};
 pub use sequence::{
     simulate_sequence, FrameStats, SequenceError, SequenceOptions, SequenceProgress,
-    SimulatedSequence, MAX_WARMUP_FRAMES,
+    SimulatedSequence, MAX_SUBSTEPS, MAX_WARMUP_FRAMES,
 };
 pub use solver::{ClothSimulator, NewtonOptions, SimOptions};
 pub use sparse::{BlockCsr, ElementSlots, PatternBuilder};

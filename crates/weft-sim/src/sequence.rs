@@ -92,6 +92,11 @@ impl Default for SequenceOptions {
 /// settle; more is a typo that would run for hours.
 pub const MAX_WARMUP_FRAMES: usize = 10_000;
 
+/// The most implicit-Euler sub-steps per frame: 100 is 25 times the default and a
+/// 0.3 ms step at 30 fps, finer than any cloth preset needs to stay stable; more is a
+/// typo that would run for days.
+pub const MAX_SUBSTEPS: usize = 100;
+
 /// What [`simulate_sequence`] reports as it goes, for progress bars.
 #[derive(Clone, Copy, Debug)]
 pub enum SequenceProgress<'a> {
@@ -289,7 +294,7 @@ fn potential_energy(sim: &ClothSimulator) -> Result<f64, SimError> {
 /// (output frame 0 is the state after the warm-up), each made of `opts.substeps`
 /// implicit-Euler steps with the body interpolated continuously in between. `progress`
 /// is told of each warm-up frame and each output frame (progress bars). At most
-/// [`MAX_WARMUP_FRAMES`] warm-up frames.
+/// [`MAX_WARMUP_FRAMES`] warm-up frames and 1 to [`MAX_SUBSTEPS`] sub-steps.
 pub fn simulate_sequence(
     garment: &TriMesh,
     material: &Material,
@@ -299,11 +304,11 @@ pub fn simulate_sequence(
     opts: &SequenceOptions,
     progress: &mut dyn FnMut(SequenceProgress<'_>),
 ) -> Result<SimulatedSequence, SequenceError> {
-    if opts.substeps == 0 {
+    if !(1..=MAX_SUBSTEPS).contains(&opts.substeps) {
         return Err(SimError::InvalidParameter {
             what: "sub-steps per frame".into(),
-            value: 0.0,
-            expected: "expected at least 1",
+            value: opts.substeps as f64,
+            expected: "expected 1 to 100 (MAX_SUBSTEPS)",
         }
         .into());
     }
@@ -799,12 +804,14 @@ mod tests {
                 Err(SequenceError::Input(SimError::InvalidParameter { .. }))
             ));
         }
-        // No sub-steps; non-finite garment.
-        let none = SequenceOptions {
-            substeps: 0,
-            ..opts
-        };
-        assert!(run(&skirt, &Material::silk(), &none).is_err());
+        // No sub-steps, or more than MAX_SUBSTEPS; non-finite garment.
+        for substeps in [0, MAX_SUBSTEPS + 1] {
+            let bad = SequenceOptions { substeps, ..opts };
+            assert!(matches!(
+                run(&skirt, &Material::silk(), &bad),
+                Err(SequenceError::Input(SimError::InvalidParameter { .. }))
+            ));
+        }
         let mut nan = skirt.clone();
         nan.positions[3][0] = f64::NAN;
         assert!(matches!(

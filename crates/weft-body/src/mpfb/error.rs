@@ -8,7 +8,7 @@ use crate::error::BodyError;
 #[derive(Debug, thiserror::Error)]
 pub enum MpfbError {
     /// A file could not be read.
-    #[error("{}: {source}", .path.display())]
+    #[error("{}: cannot access the file", .path.display())]
     Io {
         /// The file.
         path: PathBuf,

@@ -30,7 +30,7 @@ pub struct AnimateArgs {
     #[command(flatten)]
     motion: MotionArgs,
     /// Procedural motions: number of frames.
-    #[arg(long, default_value_t = 120)]
+    #[arg(long, default_value_t = 120, value_parser = super::frame_count)]
     frames: usize,
     /// Output: a directory for obj, a file otherwise.
     #[arg(long, value_name = "PATH")]
@@ -50,20 +50,21 @@ pub struct AnimateArgs {
 }
 
 pub fn run(args: &AnimateArgs) -> Result<()> {
-    let format: ExportFormat = args.format.parse()?;
+    let format: ExportFormat = args.format.parse().context("--format")?;
     if let Some(mm) = args.push_out {
         if !(mm.is_finite() && mm >= 0.0) {
             anyhow::bail!("--push-out {mm}: expected a distance in millimetres >= 0");
         }
     }
-    let deformer =
-        load_deformer(&args.run).with_context(|| format!("loading run {}", args.run.display()))?;
-    let garment = weft_mesh::read_mesh(&args.garment)
-        .with_context(|| format!("reading the garment {}", args.garment.display()))?;
+    // The options and inputs first (cheap, and named by their flags), then the run.
     let (body, _) = args.body.load()?;
     let betas64 = args.body.betas(&body)?;
     let betas: Vec<f32> = betas64.iter().map(|&b| b as f32).collect();
     let motion = args.motion.load(&body, &betas64, args.frames)?;
+    let garment = weft_mesh::read_mesh(&args.garment)
+        .with_context(|| format!("reading the garment {}", args.garment.display()))?;
+    let deformer =
+        load_deformer(&args.run).with_context(|| format!("loading run {}", args.run.display()))?;
     let started = Instant::now();
     let mut frames = animate(deformer.as_ref(), &garment, &body, &betas, &motion)?;
     let seconds = started.elapsed().as_secs_f64();

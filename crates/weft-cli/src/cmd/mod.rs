@@ -120,14 +120,30 @@ pub fn frame_rate(text: &str) -> Result<f64, String> {
 
 /// The value parser of a frame count: 1 to [`weft_motion::MAX_FRAMES`].
 pub fn frame_count(text: &str) -> Result<usize, String> {
+    count(text, 1, weft_motion::MAX_FRAMES, "frames")
+}
+
+/// The value parser of a count from `min` to `max` (`what`: its unit, plural).
+fn count(text: &str, min: usize, max: usize, what: &str) -> Result<usize, String> {
     let n: usize = text
         .parse()
         .map_err(|_| format!("`{text}` is not a whole number"))?;
-    if (1..=weft_motion::MAX_FRAMES).contains(&n) {
+    if (min..=max).contains(&n) {
         Ok(n)
     } else {
-        Err(format!("expected 1 to {} frames", weft_motion::MAX_FRAMES))
+        Err(format!("expected {min} to {max} {what}"))
     }
+}
+
+/// The value parser of a simulation's warm-up: 0 to [`weft_sim::MAX_WARMUP_FRAMES`]
+/// frames.
+pub fn warmup_frames(text: &str) -> Result<usize, String> {
+    count(text, 0, weft_sim::MAX_WARMUP_FRAMES, "warm-up frames")
+}
+
+/// The value parser of sub-steps per frame: 1 to [`weft_sim::MAX_SUBSTEPS`].
+pub fn substeps(text: &str) -> Result<usize, String> {
+    count(text, 1, weft_sim::MAX_SUBSTEPS, "sub-steps per frame")
 }
 
 /// The value parser of a finite number above 0 (a scale, a speed).

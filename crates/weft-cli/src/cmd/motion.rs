@@ -1,14 +1,15 @@
 //! `weft motion generate` and `weft motion info`.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use weft_body::joints::SMPL_JOINT_COUNT;
 use weft_motion::{
-    generate, load_motion, motion_stats, write_motion, BvhUnits, MapChoice, MotionFileOptions,
-    MotionFormat, MotionKind, MotionSource, NameMap, ProceduralParams, SkeletonPreset, UpAxis,
+    body_rest_joints, generate, load_motion, motion_stats, write_motion, BvhUnits, MapChoice,
+    MotionFileOptions, MotionFormat, MotionKind, MotionSource, NameMap, ProceduralParams,
+    SkeletonPreset, UpAxis,
 };
 
 use super::body_args::BodyArgs;
@@ -74,16 +75,8 @@ pub struct GenerateArgs {
 /// The rest joints J(β) of the body a motion file is written or read against: they
 /// shape the BVH skeleton, the retargeting target and the placement of AMASS's root.
 fn rest_joints(body: &BodyArgs) -> Result<[[f64; 3]; SMPL_JOINT_COUNT]> {
-    let (model, name) = body.load()?;
-    let joints = model
-        .joints(&body.betas(&model)?)
-        .with_context(|| format!("{name}: rest joints"))?;
-    joints.try_into().map_err(|j: Vec<[f64; 3]>| {
-        anyhow::anyhow!(
-            "{name}: the body has {} joints; motions drive SMPL's {SMPL_JOINT_COUNT}",
-            j.len()
-        )
-    })
+    let (model, _) = body.load()?;
+    Ok(body_rest_joints(&model, &body.betas(&model)?)?)
 }
 
 #[derive(Args)]
@@ -181,7 +174,22 @@ fn info(args: &InfoArgs) -> Result<()> {
     if let Some(map) = &args.map {
         options.bvh_map = match SkeletonPreset::parse(map) {
             Some(p) => MapChoice::Preset(p),
-            None => MapChoice::Custom(NameMap::read(std::path::Path::new(map))?),
+            None => {
+                // A name that is no file and has no name-map extension is a mistyped
+                // preset, not a missing file.
+                let path = std::path::Path::new(map);
+                let map_file = path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+                    e.eq_ignore_ascii_case("toml") || e.eq_ignore_ascii_case("json")
+                });
+                if !path.exists() && !map_file {
+                    let presets: Vec<&str> = SkeletonPreset::ALL.iter().map(|p| p.name()).collect();
+                    bail!(
+                        "--map {map}: neither a preset ({}) nor a .toml or .json name-map file",
+                        presets.join(", ")
+                    );
+                }
+                MapChoice::Custom(NameMap::read(path).context("--map")?)
+            }
         };
     }
     if let Some(scale) = args.scale {

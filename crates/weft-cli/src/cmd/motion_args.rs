@@ -81,6 +81,9 @@ impl MotionArgs {
         if self.up.is_some() {
             bail!("--up applies to motion files; {kind} is a procedural motion, generated Y up");
         }
+        // Procedural motions pose SMPL's joints: a body with another skeleton is
+        // refused here, naming its file, rather than when the first frame is posed.
+        body_rest_joints(model, betas)?;
         let params = ProceduralParams {
             frames,
             fps: self.fps.unwrap_or(DEFAULT_PROCEDURAL_FPS),

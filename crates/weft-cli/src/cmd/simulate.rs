@@ -34,15 +34,16 @@ pub struct SimulateArgs {
     /// Material preset: hood, silk, cotton, jersey, denim or leather.
     #[arg(long, default_value = "cotton")]
     material: String,
-    /// Implicit-Euler steps per frame.
-    #[arg(long)]
+    /// Implicit-Euler steps per frame (1 to 100; default 4).
+    #[arg(long, value_parser = super::substeps)]
     substeps: Option<usize>,
     /// Simulate at most this many frames (a procedural motion is generated this long;
     /// default 60).
-    #[arg(long)]
+    #[arg(long, value_parser = super::frame_count)]
     frames: Option<usize>,
-    /// Warm-up frames before the first output frame (rest pose → first pose).
-    #[arg(long)]
+    /// Warm-up frames before the first output frame (rest pose → first pose; 0 to
+    /// 10000, default 15).
+    #[arg(long, value_parser = super::warmup_frames)]
     warmup: Option<usize>,
     /// Also write an OBJ sequence to DIR/obj/.
     #[arg(long)]
@@ -64,7 +65,7 @@ enum AttachArg {
 const DEFAULT_PROCEDURAL_FRAMES: usize = 60;
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
-    let material = Material::preset(&args.material)?;
+    let material = Material::preset(&args.material).context("--material")?;
     let garment = load_mesh(&args.garment)
         .with_context(|| format!("reading the garment {}", args.garment.display()))?
         .mesh;
@@ -84,9 +85,6 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         ..SequenceOptions::default()
     };
     if let Some(s) = args.substeps {
-        if s == 0 {
-            bail!("--substeps 0: expected at least 1");
-        }
         opts.substeps = s;
     }
     if let Some(w) = args.warmup {

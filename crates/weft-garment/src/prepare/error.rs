@@ -48,7 +48,7 @@ pub enum PrepareError {
     #[error(transparent)]
     Sim(#[from] weft_sim::SimError),
     /// A simulator step failed (diverged); `frame` is the drape frame.
-    #[error("drape frame {frame}: {source}")]
+    #[error("drape frame {frame}")]
     Simulation {
         /// The frame that failed (0-based).
         frame: usize,
