@@ -176,7 +176,11 @@ fn outputs_are_all_or_nothing_and_bounds_hold() {
     };
     let o = run(&g, &["--warmup", "1000000000"]);
     assert!(!o.status.success());
-    assert!(stderr(&o).contains("at most 10000"), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("--warmup") && err.contains("0 to 10000"),
+        "{err}"
+    );
     assert!(!dir.join("a").exists(), "a failed run left a directory");
 
     let text = std::fs::read_to_string(&g).expect("obj");

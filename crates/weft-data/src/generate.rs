@@ -621,7 +621,7 @@ fn build_motions(
     let mut wanted: BTreeMap<MotionKey, (&MotionRecord, Vec<f64>)> = BTreeMap::new();
     for s in manifest.sequences.iter().filter(|s| owns(s.index)) {
         let key = motion_key(manifest, s);
-        if !wanted.contains_key(&key) {
+        if let std::collections::btree_map::Entry::Vacant(slot) = wanted.entry(key) {
             let record = manifest
                 .motions
                 .iter()
@@ -631,7 +631,7 @@ fn build_motions(
                     id: s.motion_id.clone(),
                     dir: out.to_path_buf(),
                 })?;
-            wanted.insert(key, (record, betas_f64(&s.betas)));
+            slot.insert((record, betas_f64(&s.betas)));
         }
     }
     wanted

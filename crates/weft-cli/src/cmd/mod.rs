@@ -2,6 +2,7 @@
 
 mod animate;
 mod attribute;
+mod bench;
 mod body;
 mod body_args;
 mod config;
@@ -62,6 +63,10 @@ pub enum Command {
     /// Animate any garment on a body shape and motion with a trained run; export as
     /// OBJ sequence, PC2/MDD or glTF binary.
     Animate(animate::AnimateArgs),
+    /// What the networks and the simulator cost on this machine, per stage: a Markdown
+    /// table or JSON lines (`weft bench multilevel|gat|simulate`).
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
 }
 
 pub fn run(command: Command) -> anyhow::Result<()> {
@@ -80,6 +85,7 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Eval(a) => eval::run(&a),
         Command::Attribute(a) => attribute::run(&a),
         Command::Animate(a) => animate::run(&a),
+        Command::Bench(c) => bench::run(c),
     }
 }
 

@@ -1,0 +1,243 @@
+//! `weft bench`: what weft's networks and simulator cost on this machine, from the
+//! release binary, as a Markdown table (one row per measured configuration, printed as
+//! it is measured) or `--json` (one object per configuration per line, for scripts that
+//! compare weft with other tools). The measurements live in weft-bench.
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use weft_bench::gat::GatBench;
+use weft_bench::multilevel::MultilevelBench;
+use weft_bench::simulate::bench_simulate;
+use weft_bench::Row;
+use weft_mesh::io::load_mesh;
+use weft_sim::{Material, SequenceOptions};
+
+use super::body_args::BodyModelArg;
+use super::emit;
+use super::motion_args::MotionArgs;
+
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// The Multilevel model per stage (inputs, E^t1, E^t2, M^mp, LBS) in ms per frame,
+    /// with the embedding GEMM's floor and rate; --train adds a training step.
+    Multilevel(MultilevelArgs),
+    /// One GAT layer, fused kernel against burn's generic path, forward and backward.
+    Gat(GatArgs),
+    /// The cloth simulator: seconds, Newton and PCG iterations per frame, edge strain
+    /// and depth in the body.
+    Simulate(SimulateArgs),
+}
+
+/// What every bench takes.
+#[derive(Args)]
+pub struct Common {
+    #[command(flatten)]
+    body: BodyModelArg,
+    /// Print one JSON object per measured configuration, one per line.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+pub struct MultilevelArgs {
+    /// Model preset: cpu or paper.
+    #[arg(long, default_value = "cpu")]
+    preset: String,
+    /// Vertices of the benchmark skirt (several: 1000,4000,12000).
+    #[arg(long, value_delimiter = ',', default_value = "4000")]
+    vertices: Vec<usize>,
+    /// Frames inferred together (several: 1,16).
+    #[arg(long, value_delimiter = ',', default_value = "1,16")]
+    batch: Vec<usize>,
+    /// Timed runs per figure, after one warm-up (the median is reported).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    reps: u32,
+    /// Also time one training step (forward, loss terms, backward, Adamax) per window
+    /// of --batch frames.
+    #[arg(long)]
+    train: bool,
+    #[command(flatten)]
+    common: Common,
+}
+
+#[derive(Args)]
+pub struct GatArgs {
+    /// Vertices of the skirt whose mesh graph the layer runs on.
+    #[arg(long, default_value_t = 4000)]
+    vertices: usize,
+    /// Input channels.
+    #[arg(long, default_value_t = 32)]
+    input: usize,
+    /// Attention heads.
+    #[arg(long, default_value_t = 4)]
+    heads: usize,
+    /// Output channels per head.
+    #[arg(long, default_value_t = 32)]
+    channels: usize,
+    /// Timed runs per figure, after one warm-up (the median is reported).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10000))]
+    reps: u32,
+    #[command(flatten)]
+    common: Common,
+}
+
+#[derive(Args)]
+pub struct SimulateArgs {
+    /// The garment (.obj/.ply) fitted to the body in its rest pose; default: a skirt of
+    /// --vertices vertices.
+    #[arg(long, value_name = "G.obj", conflicts_with = "vertices")]
+    garment: Option<std::path::PathBuf>,
+    /// Vertices of the generated skirt when no --garment is given.
+    #[arg(long, default_value_t = 4000)]
+    vertices: usize,
+    #[command(flatten)]
+    motion: MotionArgs,
+    /// Material preset: hood, silk, cotton, jersey, denim or leather.
+    #[arg(long, default_value = "silk")]
+    material: String,
+    /// Frames to simulate after the warm-up.
+    #[arg(long, default_value_t = 30, value_parser = super::frame_count)]
+    frames: usize,
+    /// Implicit-Euler steps per frame (default as `weft simulate`).
+    #[arg(long, value_parser = super::substeps)]
+    substeps: Option<usize>,
+    /// Warm-up frames (default as `weft simulate`).
+    #[arg(long, value_parser = super::warmup_frames)]
+    warmup: Option<usize>,
+    #[command(flatten)]
+    common: Common,
+}
+
+pub fn run(command: BenchCommand) -> Result<()> {
+    match command {
+        BenchCommand::Multilevel(a) => multilevel(&a),
+        BenchCommand::Gat(a) => gat(&a),
+        BenchCommand::Simulate(a) => simulate(&a),
+    }
+}
+
+fn multilevel(args: &MultilevelArgs) -> Result<()> {
+    let (body, _) = args.common.body.load()?;
+    let mut out = Output::new(args.common.json);
+    for &vertices in &args.vertices {
+        for &batch in &args.batch {
+            let bench = MultilevelBench {
+                preset: args.preset.clone(),
+                vertices,
+                batch,
+                reps: args.reps as usize,
+                train: args.train,
+            };
+            let label = format!("multilevel {} N≈{vertices} T={batch}", args.preset);
+            let spinner = spinner(&label);
+            let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
+            spinner.finish_and_clear();
+            out.row(&figures.with_context(|| label.clone())?)?;
+        }
+    }
+    Ok(())
+}
+
+fn gat(args: &GatArgs) -> Result<()> {
+    let (body, _) = args.common.body.load()?;
+    let bench = GatBench {
+        vertices: args.vertices,
+        input: args.input,
+        heads: args.heads,
+        channels: args.channels,
+        reps: args.reps as usize,
+    };
+    let spinner = spinner("gat");
+    let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
+    spinner.finish_and_clear();
+    let mut out = Output::new(args.common.json);
+    for f in figures? {
+        out.row(&f)?;
+    }
+    Ok(())
+}
+
+fn simulate(args: &SimulateArgs) -> Result<()> {
+    let material = Material::preset(&args.material).context("--material")?;
+    let (body, _) = args.common.body.load()?;
+    let garment = match &args.garment {
+        Some(path) => {
+            load_mesh(path)
+                .with_context(|| format!("reading the garment {}", path.display()))?
+                .mesh
+        }
+        None => weft_bench::skirt(&body, args.vertices).context("--vertices")?,
+    };
+    let motion = args.motion.load(&body, &[], args.frames)?;
+    let mut opts = SequenceOptions {
+        max_frames: Some(args.frames),
+        ..SequenceOptions::default()
+    };
+    if let Some(s) = args.substeps {
+        opts.substeps = s;
+    }
+    if let Some(w) = args.warmup {
+        opts.warmup_frames = w;
+    }
+    let bar = ProgressBar::new(args.frames.min(motion.frame_count()) as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} bench simulate [{bar:30}] {pos}/{len} frames  ETA {eta}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    let figures = bench_simulate(
+        &garment,
+        &material,
+        &body,
+        &motion,
+        &opts,
+        &mut |done, _| bar.set_position(done as u64),
+    );
+    bar.finish_and_clear();
+    Output::new(args.common.json).row(&figures?)
+}
+
+/// A spinner on stderr saying which stage runs.
+fn spinner(label: &str) -> ProgressBar {
+    let bar = ProgressBar::new_spinner();
+    bar.set_style(
+        ProgressStyle::with_template(&format!("{{spinner}} bench {label}: {{msg}}  {{elapsed}}"))
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
+}
+
+/// Rows as they come: a Markdown table (header before the first row) or JSON lines.
+struct Output {
+    json: bool,
+    header: bool,
+}
+
+impl Output {
+    fn new(json: bool) -> Self {
+        Output {
+            json,
+            header: false,
+        }
+    }
+
+    fn row<R: Row + Serialize>(&mut self, row: &R) -> Result<()> {
+        if self.json {
+            return emit(&serde_json::to_string(row)?);
+        }
+        let cells = row.cells();
+        if !self.header {
+            self.header = true;
+            let names: Vec<&str> = cells.iter().map(|(name, _)| *name).collect();
+            emit(&format!("| {} |", names.join(" | ")))?;
+            emit(&format!("|{}", "---|".repeat(names.len())))?;
+        }
+        let values: Vec<&str> = cells.iter().map(|(_, v)| v.as_str()).collect();
+        emit(&format!("| {} |", values.join(" | ")))
+    }
+}

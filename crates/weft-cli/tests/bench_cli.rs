@@ -1,0 +1,164 @@
+//! `weft bench`: each bench runs from the binary on a small configuration, prints one
+//! JSON object per configuration with the fields scripts rely on, and a Markdown table
+//! otherwise; bad options are refused naming them.
+
+mod common;
+
+use common::{stderr, stdout, weft};
+use serde_json::Value;
+
+fn json_lines(args: &[&str]) -> Vec<Value> {
+    let out = weft(args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    stdout(&out)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect()
+}
+
+fn number(v: &Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} missing in {v}"))
+}
+
+#[test]
+fn multilevel_reports_every_stage_per_configuration() {
+    let rows = json_lines(&[
+        "bench",
+        "multilevel",
+        "--vertices",
+        "300",
+        "--batch",
+        "1,2",
+        "--reps",
+        "1",
+        "--train",
+        "--json",
+    ]);
+    assert_eq!(rows.len(), 2);
+    for (row, batch) in rows.iter().zip([1.0, 2.0]) {
+        assert_eq!(row["bench"], "multilevel");
+        assert_eq!(row["preset"], "cpu");
+        assert_eq!(number(row, "batch"), batch);
+        let n = number(row, "vertices");
+        assert!((250.0..=400.0).contains(&n), "{n}");
+        let stages = &row["stages"];
+        let mut sum = 0.0;
+        for stage in ["inputs", "t1", "t2", "mp", "lbs"] {
+            let ms = number(stages, stage);
+            assert!(ms > 0.0, "{stage}: {ms}");
+            sum += ms;
+        }
+        // The stages are the forward pass's parts (timed apart, so only roughly).
+        let total = number(row, "ms_per_frame");
+        assert!(total > 0.0 && sum > 0.3 * total, "{sum} vs {total}");
+        assert!(number(row, "mp_embed_ms_per_frame") <= number(stages, "mp"));
+        // cpu preset: F·S = 768, heads·channels = 64, 2 submodules.
+        let floor = 2.0 * n * 768.0 * 64.0 * 2.0 / 1e9;
+        assert!((number(row, "gemm_floor_gflop") - floor).abs() < 1e-9);
+        assert!(number(row, "gemm_gflops") > 0.0);
+        assert!(number(row, "train_ms_per_frame") > 0.0);
+    }
+}
+
+#[test]
+fn gat_compares_the_fused_kernel_with_the_reference() {
+    let rows = json_lines(&["bench", "gat", "--vertices", "300", "--reps", "2", "--json"]);
+    let names: Vec<&str> = rows
+        .iter()
+        .map(|r| r["implementation"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["fused", "reference"]);
+    for r in &rows {
+        assert!(number(r, "edges") > number(r, "vertices"));
+        assert!(number(r, "forward_ms") > 0.0);
+        assert!(number(r, "forward_backward_ms") > 0.0);
+    }
+}
+
+#[test]
+fn simulate_reports_cost_and_quality_and_a_table_by_default() {
+    let rows = json_lines(&[
+        "bench",
+        "simulate",
+        "--vertices",
+        "300",
+        "--motion",
+        "walk",
+        "--frames",
+        "3",
+        "--warmup",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(rows.len(), 1);
+    let r = &rows[0];
+    assert_eq!(r["material"], "silk");
+    assert_eq!(number(r, "frames"), 2.0, "frame 0 is the warm-up");
+    assert!(number(r, "seconds_per_frame") > 0.0);
+    assert!(number(r, "newton_iterations") >= 1.0);
+    assert!(number(r, "pcg_iterations") >= 1.0);
+    let (mean, p99, max) = (
+        number(r, "strain_mean"),
+        number(r, "strain_p99"),
+        number(r, "strain_max"),
+    );
+    assert!(0.0 < mean && mean <= p99 && p99 <= max && max < 0.5, "{r}");
+    assert!(number(r, "max_penetration_mm") >= 0.0);
+
+    let out = weft(&[
+        "bench",
+        "simulate",
+        "--vertices",
+        "300",
+        "--motion",
+        "walk",
+        "--frames",
+        "2",
+        "--warmup",
+        "1",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let table = stdout(&out);
+    let lines: Vec<&str> = table.lines().collect();
+    assert_eq!(lines.len(), 3, "{table}");
+    assert!(lines[0].starts_with("| N | material |"), "{table}");
+}
+
+#[test]
+fn bad_options_are_named() {
+    for (args, names) in [
+        (&["bench", "multilevel", "--preset", "huge"][..], "--preset"),
+        (&["bench", "multilevel", "--batch", "0"][..], "--batch"),
+        (&["bench", "gat", "--heads", "0"][..], "--heads"),
+        (
+            &[
+                "bench",
+                "simulate",
+                "--motion",
+                "walk",
+                "--material",
+                "kevlar",
+            ][..],
+            "--material",
+        ),
+        (
+            &[
+                "bench",
+                "simulate",
+                "--motion",
+                "walk",
+                "--substeps",
+                "1000",
+            ][..],
+            "--substeps",
+        ),
+    ] {
+        let out = weft(args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = stderr(&out);
+        assert!(err.contains(names), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+    }
+}
