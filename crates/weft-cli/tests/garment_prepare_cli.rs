@@ -5,7 +5,7 @@
 use std::path::Path;
 
 mod common;
-use common::{s, scratch, stderr, stdout, weft};
+use common::{garment, s, scratch, stderr, stdout, weft};
 
 fn ok(args: &[&str]) -> String {
     let out = weft(args);
@@ -53,16 +53,7 @@ fn resize_then_prepare_with_weights() {
         file(&d, "w.npy"),
         file(&d, "report.json"),
     );
-    ok(&[
-        "garment",
-        "generate",
-        "--kind",
-        "tshirt",
-        "--vertices",
-        "400",
-        "--out",
-        &g,
-    ]);
+    garment(Path::new(&g), "tshirt", 400, 0);
     let out = ok(&[
         "garment",
         "resize",
@@ -131,16 +122,7 @@ fn resize_then_prepare_with_weights() {
 fn drape_writes_ply_and_reports() {
     let d = scratch("drape");
     let (g, out_ply, rep) = (file(&d, "g.obj"), file(&d, "d.ply"), file(&d, "d.json"));
-    ok(&[
-        "garment",
-        "generate",
-        "--kind",
-        "skirt",
-        "--vertices",
-        "300",
-        "--out",
-        &g,
-    ]);
+    garment(Path::new(&g), "skirt", 300, 0);
     let out = ok(&[
         "garment",
         "drape",
@@ -166,16 +148,7 @@ fn drape_writes_ply_and_reports() {
 fn bad_input_is_one_line_of_error() {
     let d = scratch("bad");
     let g = file(&d, "g.obj");
-    ok(&[
-        "garment",
-        "generate",
-        "--kind",
-        "skirt",
-        "--vertices",
-        "300",
-        "--out",
-        &g,
-    ]);
+    garment(Path::new(&g), "skirt", 300, 0);
     let out = file(&d, "o.obj");
     let e = fails(&[
         "garment",
@@ -229,16 +202,7 @@ fn bad_input_is_one_line_of_error() {
 fn prepare_writes_nothing_when_the_weights_fail() {
     let d = scratch("prepare_all_or_nothing");
     let g = file(&d, "g.obj");
-    ok(&[
-        "garment",
-        "generate",
-        "--kind",
-        "skirt",
-        "--vertices",
-        "300",
-        "--out",
-        &g,
-    ]);
+    garment(Path::new(&g), "skirt", 300, 0);
     let out = file(&d, "prepared.obj");
     let report = file(&d, "report.json");
     // The weights' parent is a file: the write fails after the mesh is computed.

@@ -3,7 +3,7 @@
 use std::path::Path;
 
 mod common;
-use common::{s, scratch, stderr, stdout, weft};
+use common::{garment, s, scratch, stderr, stdout, weft};
 
 #[test]
 fn generate_then_info_in_both_formats() {
@@ -408,19 +408,7 @@ fn fps_with_a_motion_file_resamples_and_says_so() {
 
     // weft simulate: the frames written are at 30 fps.
     let skirt = dir.join("skirt.obj");
-    let o = weft(&[
-        "garment",
-        "generate",
-        "--kind",
-        "skirt",
-        "--vertices",
-        "300",
-        "--seed",
-        "1",
-        "--out",
-        s(&skirt),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    garment(&skirt, "skirt", 300, 1);
     let out = dir.join("sim");
     let o = weft(&[
         "simulate",

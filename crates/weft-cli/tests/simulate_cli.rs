@@ -5,24 +5,12 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{s, scratch, stderr, stdout, weft};
+use common::{garment, s, scratch, stderr, stdout, weft};
 
 /// A 300-vertex skirt fitted to the default body.
 fn skirt(dir: &Path) -> PathBuf {
     let g = dir.join("skirt.obj");
-    let o = weft(&[
-        "garment",
-        "generate",
-        "--kind",
-        "skirt",
-        "--vertices",
-        "300",
-        "--seed",
-        "1",
-        "--out",
-        s(&g),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    garment(&g, "skirt", 300, 1);
     g
 }
 

@@ -60,7 +60,7 @@ pub struct AttributeArgs {
 }
 
 pub fn run(args: &AttributeArgs) -> Result<()> {
-    if args.out.extension().and_then(|e| e.to_str()) != Some("png") {
+    if !super::has_extension(&args.out, &["png"]) {
         bail!("--out {} must end in .png", args.out.display());
     }
     // The garment, shape and motion are checked before the run is loaded, so a bad one

@@ -199,12 +199,7 @@ fn info(args: &InfoArgs) -> Result<()> {
 fn export(args: &ExportArgs) -> Result<()> {
     let (model, _) = args.body.load()?;
     let betas = args.body.betas(&model)?;
-    let ext = args
-        .out
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if ext.as_deref() == Some("npz") {
+    if super::has_extension(&args.out, &["npz"]) {
         let mut parts = model.to_parts();
         parts.v_template = model.shape_vertices(&betas)?;
         let shaped = BodyModel::new(parts, model.source())?;

@@ -16,7 +16,7 @@ use weft_garment::{DressTop, FitBody, GarmentKind, SkirtLength, Style};
 use weft_mesh::{Topology, TriMesh};
 
 use super::body_args::{shape, BodyArgs, BodyModelArg, ShapeLimit};
-use super::emit;
+use super::{emit, has_extension};
 
 #[derive(Subcommand)]
 pub enum GarmentCommand {
@@ -193,12 +193,6 @@ fn number<T: std::str::FromStr>(flag: &str, text: &str) -> Result<T> {
 }
 
 /// Whether `path` ends in `.ext` (any case).
-fn has_extension(path: &Path, ext: &str) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case(ext))
-}
-
 fn run_generate(a: &GenerateArgs) -> Result<()> {
     let kind = GarmentKind::parse(&a.kind).context("--kind")?;
     let vertices: usize = number("vertices", &a.vertices)?;
@@ -228,7 +222,7 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
     }
     let (model, name) = a.body.load()?;
     let betas = a.body.betas(&model)?;
-    if !has_extension(&a.out, "obj") {
+    if !has_extension(&a.out, &["obj"]) {
         bail!(
             "--out {}: expected an .obj file (garments are written as OBJ with their UVs)",
             a.out.display()
@@ -421,7 +415,7 @@ fn run_drape(a: &DrapeArgs) -> Result<()> {
 }
 
 fn run_prepare(a: &PrepareArgs) -> Result<()> {
-    if let Some(path) = a.weights.as_deref().filter(|p| !has_extension(p, "npy")) {
+    if let Some(path) = a.weights.as_deref().filter(|p| !has_extension(p, &["npy"])) {
         bail!(
             "--weights {}: expected a .npy file (float32, vertices × joints)",
             path.display()

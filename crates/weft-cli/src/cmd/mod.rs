@@ -107,6 +107,14 @@ pub fn emit(text: &str) -> anyhow::Result<()> {
     }
 }
 
+/// Whether `path` ends in one of `extensions` (without the dot, any case): the one
+/// extension test of every command, so that `OUT.PNG` and `out.png` are alike everywhere.
+pub fn has_extension(path: &std::path::Path, extensions: &[&str]) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| extensions.iter().any(|x| e.eq_ignore_ascii_case(x)))
+}
+
 /// The value parser of every `--fps`: a frame rate above 0 and at most
 /// [`weft_motion::MAX_FPS`], refused by clap naming the flag (`invalid value '-3' for
 /// '--fps <FPS>': …`) rather than later by the motion code in words that name none.

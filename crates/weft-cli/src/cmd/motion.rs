@@ -178,10 +178,7 @@ fn info(args: &InfoArgs) -> Result<()> {
                 // A name that is no file and has no name-map extension is a mistyped
                 // preset, not a missing file.
                 let path = std::path::Path::new(map);
-                let map_file = path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
-                    e.eq_ignore_ascii_case("toml") || e.eq_ignore_ascii_case("json")
-                });
-                if !path.exists() && !map_file {
+                if !path.exists() && !super::has_extension(path, &["toml", "json"]) {
                     let presets: Vec<&str> = SkeletonPreset::ALL.iter().map(|p| p.name()).collect();
                     bail!(
                         "--map {map}: neither a preset ({}) nor a .toml or .json name-map file",

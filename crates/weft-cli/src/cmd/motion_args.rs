@@ -58,11 +58,7 @@ impl MotionArgs {
     /// .bvh (so that a missing file is reported as such, not as an unknown name).
     pub fn is_file(&self) -> bool {
         let path = Path::new(&self.motion);
-        path.exists()
-            || path
-                .extension()
-                .and_then(|e| e.to_str())
-                .is_some_and(|e| e.eq_ignore_ascii_case("npz") || e.eq_ignore_ascii_case("bvh"))
+        path.exists() || super::has_extension(path, &["npz", "bvh"])
     }
 
     /// The motion for `model` at shape `betas`: the file read for that body (see

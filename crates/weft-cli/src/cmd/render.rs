@@ -120,12 +120,7 @@ impl Values {
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let ext = args
-        .out
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if ext.as_deref() != Some("png") {
+    if !super::has_extension(&args.out, &["png"]) {
         bail!(
             "{}: the output must be a .png file (weft render writes PNG{})",
             args.out.display(),
@@ -290,7 +285,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 fn body_mesh(args: &RenderArgs) -> Result<Option<(TriMesh, String)>> {
     let b = &args.body;
     match &b.model.body {
-        Some(p) if !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("npz")) => {
+        Some(p) if !super::has_extension(p, &["npz"]) => {
             if !b.betas.is_empty() {
                 bail!(
                     "--betas shapes a body model (.npz or --default-body); {} is a mesh",
@@ -332,11 +327,7 @@ fn frame_files(dir: &Path) -> Result<Vec<PathBuf>> {
     for e in entries {
         let e = e.with_context(|| format!("{}: cannot list the directory", dir.display()))?;
         let p = e.path();
-        let ext = p
-            .extension()
-            .and_then(|x| x.to_str())
-            .map(str::to_ascii_lowercase);
-        if matches!(ext.as_deref(), Some("obj" | "ply")) && p.is_file() {
+        if super::has_extension(&p, &["obj", "ply"]) && p.is_file() {
             files.push(p);
         }
     }

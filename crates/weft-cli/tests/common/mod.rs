@@ -39,3 +39,22 @@ pub fn scratch(name: &str) -> PathBuf {
 pub fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")
 }
+
+/// `weft garment generate --kind KIND --vertices N --seed SEED --out PATH`, which must
+/// succeed: the garment most CLI tests start from.
+pub fn garment(path: &Path, kind: &str, vertices: usize, seed: u64) {
+    let (n, seed) = (vertices.to_string(), seed.to_string());
+    let o = weft(&[
+        "garment",
+        "generate",
+        "--kind",
+        kind,
+        "--vertices",
+        &n,
+        "--seed",
+        &seed,
+        "--out",
+        s(path),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
