@@ -16,7 +16,13 @@
 //! The GEMM floor is `2 · N · F·S · heads·channels · submodules` FLOP per frame; the
 //! same GEMM is also timed alone (`gemm_ms_per_frame`, `gemm_gflops`): the rate burn's
 //! matmul reaches on this machine bounds what the embedding can.
+//!
+//! E^t2 is a stacked LSTM whose weights (528 MB at `paper` widths) are read once per
+//! history step for the whole batch, so its floor is the larger of its FLOP at the GEMM
+//! rate and its weight bytes at the memory bandwidth (`memory_gbs`, a timed copy of a
+//! 256 MiB buffer): `t2_floor_ms_per_frame`.
 
+use burn::module::Module;
 use burn::optim::GradientsParams;
 use burn::tensor::{Distribution, Tensor};
 use serde::Serialize;
@@ -90,6 +96,13 @@ pub struct MultilevelFigures {
     pub gemm_ms_per_frame: f64,
     /// Its rate, GFLOP/s.
     pub gemm_gflops: f64,
+    /// Parameters of E^t2.
+    pub t2_parameters: usize,
+    /// E^t2's floor: `max(2 · P · m FLOP at gemm_gflops, 4 · P · m / T bytes at
+    /// memory_gbs)` for `P` parameters and `m` history steps, ms per frame.
+    pub t2_floor_ms_per_frame: f64,
+    /// Memory bandwidth of a large copy (bytes read + written per second), GB/s.
+    pub memory_gbs: f64,
     /// The pair encoding (once per garment and body), ms.
     pub pair_encoding_ms: f64,
     /// One training step (forward of the window, vertex, edge and normal terms,
@@ -196,6 +209,16 @@ impl MultilevelBench {
         );
         let gemm = median_ms(reps, || sync(pair.fused.clone().matmul(w.clone())))
             * cfg.mp_submodules as f64;
+        let gemm_gflops = floor / (per(gemm) * 1e-3) / 1e9;
+
+        progress("memory bandwidth");
+        let memory_gbs = memory_bandwidth_gbs(reps);
+        let t2_parameters = model.t2.num_params();
+        let steps = (t2_parameters * cfg.history) as f64;
+        let t2_floor_ms_per_frame = f64::max(
+            2.0 * steps / (gemm_gflops * 1e9),
+            4.0 * steps / t as f64 / (memory_gbs * 1e9),
+        ) * 1e3;
 
         let train_ms_per_frame = if self.train {
             progress("training step");
@@ -220,11 +243,30 @@ impl MultilevelBench {
             mp_embed_ms_per_frame: per(embed),
             gemm_floor_gflop: floor / 1e9,
             gemm_ms_per_frame: per(gemm),
-            gemm_gflops: floor / (per(gemm) * 1e-3) / 1e9,
+            gemm_gflops,
+            t2_parameters,
+            t2_floor_ms_per_frame,
+            memory_gbs,
             pair_encoding_ms,
             train_ms_per_frame,
         })
     }
+}
+
+/// The rate of copying a 256 MiB buffer into another on all threads (as a GEMM streams
+/// its weights), counting the bytes read and written, GB/s.
+fn memory_bandwidth_gbs(reps: usize) -> f64 {
+    const BYTES: usize = 256 << 20;
+    let from = vec![1u8; BYTES];
+    let mut to = vec![0u8; BYTES];
+    let ms = median_ms(reps.min(5), || {
+        use rayon::prelude::*;
+        to.par_chunks_mut(1 << 20)
+            .zip(from.par_chunks(1 << 20))
+            .for_each(|(a, b)| a.copy_from_slice(b));
+        std::hint::black_box(&mut to);
+    });
+    2.0 * BYTES as f64 / (ms * 1e-3) / 1e9
 }
 
 /// One training step of `weft train`'s Multilevel task on a window of `t` frames of the
@@ -278,6 +320,7 @@ impl Row for MultilevelFigures {
             ("inputs", ms(self.stages.inputs)),
             ("t1", ms(self.stages.t1)),
             ("t2", ms(self.stages.t2)),
+            ("(t2 floor)", ms(self.t2_floor_ms_per_frame)),
             ("mp", ms(self.stages.mp)),
             ("(embed)", ms(self.mp_embed_ms_per_frame)),
             ("lbs", ms(self.stages.lbs)),
@@ -285,6 +328,7 @@ impl Row for MultilevelFigures {
             ("GEMM floor GFLOP", format!("{:.3}", self.gemm_floor_gflop)),
             ("GEMM ms", ms(self.gemm_ms_per_frame)),
             ("GEMM GFLOP/s", format!("{:.0}", self.gemm_gflops)),
+            ("memory GB/s", format!("{:.1}", self.memory_gbs)),
         ];
         if let Some(train) = self.train_ms_per_frame {
             cells.push(("train ms/frame", ms(train)));

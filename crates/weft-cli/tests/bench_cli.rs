@@ -58,6 +58,9 @@ fn multilevel_reports_every_stage_per_configuration() {
         let floor = 2.0 * n * 768.0 * 64.0 * 2.0 / 1e9;
         assert!((number(row, "gemm_floor_gflop") - floor).abs() < 1e-9);
         assert!(number(row, "gemm_gflops") > 0.0);
+        assert!(number(row, "memory_gbs") > 0.0);
+        assert!(number(row, "t2_floor_ms_per_frame") > 0.0);
+        assert!(number(row, "t2_parameters") > 0.0);
         assert!(number(row, "train_ms_per_frame") > 0.0);
     }
 }
