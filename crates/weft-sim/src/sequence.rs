@@ -683,58 +683,61 @@ mod tests {
         assert!(z(&seq.frames[4]) > z(&seq.frames[0]) + 0.05);
     }
 
-    /// Issue 17 item 6: a garment a kilometre from the body is refused, not simulated
-    /// falling beside it.
-    #[test]
-    fn a_garment_far_from_the_body_is_refused() {
+    /// What `simulate_sequence` refuses a small skirt on the default body with, before
+    /// any frame starts (`edit` changes the skirt).
+    fn refusal(edit: impl FnOnce(&mut TriMesh), opts: &SequenceOptions) -> String {
         let body = weft_body::default_body().unwrap();
         let rest = body.shaped(&[]).unwrap().vertices;
         let mut skirt = test_skirt(&rest, 8, 3);
-        for p in &mut skirt.positions {
-            p[0] += 1000.0;
-        }
-        let e = simulate_sequence(
+        edit(&mut skirt);
+        simulate_sequence(
             &skirt,
             &Material::cotton(),
             &body,
             &[],
             &walk(2),
-            &SequenceOptions::default(),
+            opts,
             &mut |_| panic!("no frame may start"),
         )
         .unwrap_err()
-        .to_string();
+        .to_string()
+    }
+
+    /// Issue 17 item 6: a garment a kilometre from the body is refused, not simulated
+    /// falling beside it.
+    #[test]
+    fn a_garment_far_from_the_body_is_refused() {
+        let far = |skirt: &mut TriMesh| {
+            for p in &mut skirt.positions {
+                p[0] += 1000.0;
+            }
+        };
+        let e = refusal(far, &SequenceOptions::default());
         assert!(
             e.contains("nearest vertex is 99") && e.contains("m from the body"),
             "{e}"
         );
     }
 
-    /// Issue 17 item 8: a warm-up past the bound is refused before any work.
+    /// Issue 17 item 8: a warm-up or sub-steps past their bounds are refused before any
+    /// work.
     #[test]
-    fn an_endless_warm_up_is_refused() {
-        let body = weft_body::default_body().unwrap();
-        let rest = body.shaped(&[]).unwrap().vertices;
-        let skirt = test_skirt(&rest, 8, 3);
+    fn an_endless_warm_up_or_substepping_is_refused() {
         let opts = SequenceOptions {
             warmup_frames: 1_000_000_000,
             ..SequenceOptions::default()
         };
-        let e = simulate_sequence(
-            &skirt,
-            &Material::cotton(),
-            &body,
-            &[],
-            &walk(2),
-            &opts,
-            &mut |_| panic!("no frame may start"),
-        )
-        .unwrap_err()
-        .to_string();
+        let e = refusal(|_| {}, &opts);
         assert!(
             e.contains("warm-up frames") && e.contains("at most 10000"),
             "{e}"
         );
+        let opts = SequenceOptions {
+            substeps: 1_000_000,
+            ..SequenceOptions::default()
+        };
+        let e = refusal(|_| {}, &opts);
+        assert!(e.contains("sub-steps") && e.contains("1 to 100"), "{e}");
     }
 
     /// A step that diverges ends the run with the frame named and the finished frames
