@@ -165,3 +165,88 @@ fn bad_options_are_named() {
         assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
     }
 }
+
+/// `--options` lays a TOML file of `SequenceOptions` over the defaults, for `weft
+/// simulate` and its bench alike; an unknown key is refused naming the file and key.
+#[test]
+fn simulator_options_come_from_a_toml_file() {
+    let dir = common::scratch("options");
+    let options = dir.join("one-newton.toml");
+    std::fs::write(&options, "substeps = 3\n[sim.newton]\nmax_iterations = 1\n").unwrap();
+    let rows = json_lines(&[
+        "bench",
+        "simulate",
+        "--vertices",
+        "300",
+        "--motion",
+        "walk",
+        "--frames",
+        "3",
+        "--warmup",
+        "1",
+        "--options",
+        common::s(&options),
+        "--json",
+    ]);
+    assert_eq!(number(&rows[0], "substeps"), 3.0);
+    assert_eq!(
+        number(&rows[0], "newton_iterations"),
+        3.0,
+        "one per sub-step"
+    );
+    // The flag wins over the file.
+    let rows = json_lines(&[
+        "bench",
+        "simulate",
+        "--vertices",
+        "300",
+        "--motion",
+        "walk",
+        "--frames",
+        "2",
+        "--warmup",
+        "1",
+        "--options",
+        common::s(&options),
+        "--substeps",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(number(&rows[0], "newton_iterations"), 2.0);
+
+    let typo = dir.join("typo.toml");
+    std::fs::write(&typo, "[sim.newton]\nmax_iteration = 1\n").unwrap();
+    let g = dir.join("g.obj");
+    common::garment(&g, "skirt", 300, 1);
+    for args in [
+        vec![
+            "bench",
+            "simulate",
+            "--motion",
+            "walk",
+            "--options",
+            common::s(&typo),
+        ],
+        vec![
+            "simulate",
+            "--garment",
+            common::s(&g),
+            "--motion",
+            "walk",
+            "--options",
+            common::s(&typo),
+            "--out",
+            common::s(&dir.join("sim")),
+        ],
+    ] {
+        let out = weft(&args);
+        assert!(!out.status.success());
+        let err = stderr(&out);
+        assert!(
+            err.contains("typo.toml") && err.contains("sim.newton.max_iteration"),
+            "{err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    assert!(!dir.join("sim").exists());
+}

@@ -100,6 +100,10 @@ pub struct SimulateArgs {
     /// Frames to simulate after the warm-up.
     #[arg(long, default_value_t = 30, value_parser = super::frame_count)]
     frames: usize,
+    /// The simulator's options as TOML, as `weft simulate --options` takes them (the
+    /// flags below override it).
+    #[arg(long, value_name = "FILE.toml")]
+    options: Option<std::path::PathBuf>,
     /// Implicit-Euler steps per frame (default as `weft simulate`).
     #[arg(long, value_parser = super::substeps)]
     substeps: Option<usize>,
@@ -173,7 +177,7 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
     let motion = args.motion.load(&body, &[], args.frames)?;
     let mut opts = SequenceOptions {
         max_frames: Some(args.frames),
-        ..SequenceOptions::default()
+        ..super::simulate::sequence_options(args.options.as_deref())?
     };
     if let Some(s) = args.substeps {
         opts.substeps = s;

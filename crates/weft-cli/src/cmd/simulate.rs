@@ -34,6 +34,12 @@ pub struct SimulateArgs {
     /// Material preset: hood, silk, cotton, jersey, denim or leather.
     #[arg(long, default_value = "cotton")]
     material: String,
+    /// The simulator's options as TOML (`substeps`, `warmup_frames`, `skinning`, a
+    /// `[sim]` table with `[sim.newton]`, …: the keys of `weft_sim::SequenceOptions`),
+    /// laid over the defaults; `--attach`, `--substeps`, `--warmup` and `--frames`
+    /// override it. An unknown key is refused.
+    #[arg(long, value_name = "FILE.toml")]
+    options: Option<PathBuf>,
     /// Implicit-Euler steps per frame (1 to 100; default 4).
     #[arg(long, value_parser = super::substeps)]
     substeps: Option<usize>,
@@ -76,13 +82,14 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         &betas,
         args.frames.unwrap_or(DEFAULT_PROCEDURAL_FRAMES),
     )?;
+    let file = sequence_options(args.options.as_deref())?;
     let mut opts = SequenceOptions {
-        max_frames: args.frames,
+        max_frames: args.frames.or(file.max_frames),
         attachment: match args.attach {
             AttachArg::Top => Attachment::TopOpening,
             AttachArg::None => Attachment::None,
         },
-        ..SequenceOptions::default()
+        ..file
     };
     if let Some(s) = args.substeps {
         opts.substeps = s;
@@ -169,6 +176,25 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         }
         Err(e) => Err(e).with_context(|| format!("simulating {}", args.garment.display())),
     }
+}
+
+/// `SequenceOptions::default()` with the TOML file at `path` laid over it
+/// ([`weft_config::overlay`]: unknown keys refused, naming the file and the key).
+pub fn sequence_options(path: Option<&Path>) -> Result<SequenceOptions> {
+    let defaults = SequenceOptions::default();
+    let Some(path) = path else {
+        return Ok(defaults);
+    };
+    let text = weft_mesh::io::read_input_to_string(path)
+        .with_context(|| format!("--options {}", path.display()))?;
+    let table = weft_config::parse_table(&text)
+        .map_err(|message| anyhow::anyhow!("--options {}: {message}", path.display()))?;
+    Ok(weft_config::overlay(
+        &defaults,
+        &table,
+        &path.display().to_string(),
+        "",
+    )?)
 }
 
 /// What the run was, for stats.json and the summary.
