@@ -17,10 +17,11 @@
 //! same GEMM is also timed alone (`gemm_ms_per_frame`, `gemm_gflops`): the rate burn's
 //! matmul reaches on this machine bounds what the embedding can.
 //!
-//! E^t2 is a stacked LSTM whose weights (528 MB at `paper` widths) are read once per
-//! history step for the whole batch, so its floor is the larger of its FLOP at the GEMM
-//! rate and its weight bytes at the memory bandwidth (`memory_gbs`, a timed copy of a
-//! 256 MiB buffer): `t2_floor_ms_per_frame`.
+//! E^t2 is a stacked LSTM (528 MB of weights at `paper` widths); a window of `m` steps
+//! must read its input-side weights once and its hidden-side weights `m − 1` times (the
+//! first step's hidden state is zero), shared by the whole batch, so its floor is the
+//! larger of its FLOP at the GEMM rate and those bytes at the memory bandwidth
+//! (`memory_gbs`, a timed parallel copy of a 256 MiB buffer): `t2_floor_ms_per_frame`.
 
 use burn::module::Module;
 use burn::optim::GradientsParams;
@@ -98,8 +99,9 @@ pub struct MultilevelFigures {
     pub gemm_gflops: f64,
     /// Parameters of E^t2.
     pub t2_parameters: usize,
-    /// E^t2's floor: `max(2 · P · m FLOP at gemm_gflops, 4 · P · m / T bytes at
-    /// memory_gbs)` for `P` parameters and `m` history steps, ms per frame.
+    /// E^t2's floor, ms per frame: `max(2 · (P_x · m + P_h · (m − 1)) FLOP at
+    /// gemm_gflops, 4 · (P_x + P_h · (m − 1)) / T bytes at memory_gbs)` for `P_x`
+    /// input-side and `P_h` hidden-side parameters and `m` history steps.
     pub t2_floor_ms_per_frame: f64,
     /// Memory bandwidth of a large copy (bytes read + written per second), GB/s.
     pub memory_gbs: f64,
@@ -214,11 +216,12 @@ impl MultilevelBench {
         progress("memory bandwidth");
         let memory_gbs = memory_bandwidth_gbs(reps);
         let t2_parameters = model.t2.num_params();
-        let steps = (t2_parameters * cfg.history) as f64;
-        let t2_floor_ms_per_frame = f64::max(
-            2.0 * steps / (gemm_gflops * 1e9),
-            4.0 * steps / t as f64 / (memory_gbs * 1e9),
-        ) * 1e3;
+        let (p_x, p_h) = model.t2.parameter_split();
+        let m = cfg.history;
+        let flop = 2.0 * (p_x * m + p_h * m.saturating_sub(1)) as f64;
+        let bytes = 4.0 * (p_x + p_h * m.saturating_sub(1)) as f64 / t as f64;
+        let t2_floor_ms_per_frame =
+            f64::max(flop / (gemm_gflops * 1e9), bytes / (memory_gbs * 1e9)) * 1e3;
 
         let train_ms_per_frame = if self.train {
             progress("training step");
