@@ -71,7 +71,7 @@ impl LstmEncoder {
 
     /// Parameters applied to each step's input (`W_x`, `b_x` of every gate and layer) and
     /// to the previous hidden state (`W_h`, `b_h`): a window of `m` steps reads the first
-    /// once and the second `m − 1` times (see [`layer_forward`]).
+    /// once and the second `m − 1` times (the forward pass skips the zero initial state).
     pub fn parameter_split(&self) -> (usize, usize) {
         let linear = |l: &burn::nn::Linear| {
             l.weight.shape().num_elements()
