@@ -16,6 +16,13 @@ fn json_lines(args: &[&str]) -> Vec<Value> {
         .collect()
 }
 
+/// `weft bench simulate` of a 300-vertex skirt on the walk, then `extra`.
+fn bench_simulate<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec!["bench", "simulate", "--vertices", "300", "--motion", "walk"];
+    args.extend_from_slice(extra);
+    args
+}
+
 fn number(v: &Value, key: &str) -> f64 {
     v[key]
         .as_f64()
@@ -82,19 +89,9 @@ fn gat_compares_the_fused_kernel_with_the_reference() {
 
 #[test]
 fn simulate_reports_cost_and_quality_and_a_table_by_default() {
-    let rows = json_lines(&[
-        "bench",
-        "simulate",
-        "--vertices",
-        "300",
-        "--motion",
-        "walk",
-        "--frames",
-        "3",
-        "--warmup",
-        "2",
-        "--json",
-    ]);
+    let rows = json_lines(&bench_simulate(&[
+        "--frames", "3", "--warmup", "2", "--json",
+    ]));
     assert_eq!(rows.len(), 1);
     let r = &rows[0];
     assert_eq!(r["material"], "silk");
@@ -110,18 +107,7 @@ fn simulate_reports_cost_and_quality_and_a_table_by_default() {
     assert!(0.0 < mean && mean <= p99 && p99 <= max && max < 0.5, "{r}");
     assert!(number(r, "max_penetration_mm") >= 0.0);
 
-    let out = weft(&[
-        "bench",
-        "simulate",
-        "--vertices",
-        "300",
-        "--motion",
-        "walk",
-        "--frames",
-        "2",
-        "--warmup",
-        "1",
-    ]);
+    let out = weft(&bench_simulate(&["--frames", "2", "--warmup", "1"]));
     assert!(out.status.success(), "{}", stderr(&out));
     let table = stdout(&out);
     let lines: Vec<&str> = table.lines().collect();
@@ -173,13 +159,7 @@ fn simulator_options_come_from_a_toml_file() {
     let dir = common::scratch("options");
     let options = dir.join("one-newton.toml");
     std::fs::write(&options, "substeps = 3\n[sim.newton]\nmax_iterations = 1\n").unwrap();
-    let rows = json_lines(&[
-        "bench",
-        "simulate",
-        "--vertices",
-        "300",
-        "--motion",
-        "walk",
+    let rows = json_lines(&bench_simulate(&[
         "--frames",
         "3",
         "--warmup",
@@ -187,7 +167,7 @@ fn simulator_options_come_from_a_toml_file() {
         "--options",
         common::s(&options),
         "--json",
-    ]);
+    ]));
     assert_eq!(number(&rows[0], "substeps"), 3.0);
     assert_eq!(
         number(&rows[0], "newton_iterations"),
@@ -195,13 +175,7 @@ fn simulator_options_come_from_a_toml_file() {
         "one per sub-step"
     );
     // The flag wins over the file.
-    let rows = json_lines(&[
-        "bench",
-        "simulate",
-        "--vertices",
-        "300",
-        "--motion",
-        "walk",
+    let rows = json_lines(&bench_simulate(&[
         "--frames",
         "2",
         "--warmup",
@@ -211,7 +185,7 @@ fn simulator_options_come_from_a_toml_file() {
         "--substeps",
         "2",
         "--json",
-    ]);
+    ]));
     assert_eq!(number(&rows[0], "newton_iterations"), 2.0);
 
     let typo = dir.join("typo.toml");

@@ -17,6 +17,7 @@ use weft_sim::{Material, SequenceOptions};
 use super::body_args::BodyModelArg;
 use super::emit;
 use super::motion_args::MotionArgs;
+use super::simulate::SolverArgs;
 
 #[derive(Subcommand)]
 pub enum BenchCommand {
@@ -100,16 +101,8 @@ pub struct SimulateArgs {
     /// Frames to simulate after the warm-up.
     #[arg(long, default_value_t = 30, value_parser = super::frame_count)]
     frames: usize,
-    /// The simulator's options as TOML, as `weft simulate --options` takes them (the
-    /// flags below override it).
-    #[arg(long, value_name = "FILE.toml")]
-    options: Option<std::path::PathBuf>,
-    /// Implicit-Euler steps per frame (default as `weft simulate`).
-    #[arg(long, value_parser = super::substeps)]
-    substeps: Option<usize>,
-    /// Warm-up frames (default as `weft simulate`).
-    #[arg(long, value_parser = super::warmup_frames)]
-    warmup: Option<usize>,
+    #[command(flatten)]
+    solver: SolverArgs,
     #[command(flatten)]
     common: Common,
 }
@@ -175,17 +168,11 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         None => weft_bench::skirt(&body, args.vertices).context("--vertices")?,
     };
     let motion = args.motion.load(&body, &[], args.frames)?;
-    let mut opts = SequenceOptions {
+    let opts = SequenceOptions {
         max_frames: Some(args.frames),
-        ..super::simulate::sequence_options(args.options.as_deref())?
+        ..args.solver.load()?
     };
-    if let Some(s) = args.substeps {
-        opts.substeps = s;
-    }
-    if let Some(w) = args.warmup {
-        opts.warmup_frames = w;
-    }
-    let bar = ProgressBar::new(args.frames.min(motion.frame_count()) as u64);
+    let bar = ProgressBar::new(0);
     bar.set_style(
         ProgressStyle::with_template(
             "{spinner} bench simulate [{bar:30}] {pos}/{len} frames  ETA {eta}",
@@ -199,7 +186,10 @@ fn simulate(args: &SimulateArgs) -> Result<()> {
         &body,
         &motion,
         &opts,
-        &mut |done, _| bar.set_position(done as u64),
+        &mut |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
     );
     bar.finish_and_clear();
     Output::new(args.common.json).row(&figures?)

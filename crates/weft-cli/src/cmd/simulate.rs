@@ -34,23 +34,12 @@ pub struct SimulateArgs {
     /// Material preset: hood, silk, cotton, jersey, denim or leather.
     #[arg(long, default_value = "cotton")]
     material: String,
-    /// The simulator's options as TOML (`substeps`, `warmup_frames`, `skinning`, a
-    /// `[sim]` table with `[sim.newton]`, …: the keys of `weft_sim::SequenceOptions`),
-    /// laid over the defaults; `--attach`, `--substeps`, `--warmup` and `--frames`
-    /// override it. An unknown key is refused.
-    #[arg(long, value_name = "FILE.toml")]
-    options: Option<PathBuf>,
-    /// Implicit-Euler steps per frame (1 to 100; default 4).
-    #[arg(long, value_parser = super::substeps)]
-    substeps: Option<usize>,
+    #[command(flatten)]
+    solver: SolverArgs,
     /// Simulate at most this many frames (a procedural motion is generated this long;
     /// default 60).
     #[arg(long, value_parser = super::frame_count)]
     frames: Option<usize>,
-    /// Warm-up frames before the first output frame (rest pose → first pose; 0 to
-    /// 10000, default 15).
-    #[arg(long, value_parser = super::warmup_frames)]
-    warmup: Option<usize>,
     /// Also write an OBJ sequence to DIR/obj/.
     #[arg(long)]
     obj: bool,
@@ -82,21 +71,15 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         &betas,
         args.frames.unwrap_or(DEFAULT_PROCEDURAL_FRAMES),
     )?;
-    let file = sequence_options(args.options.as_deref())?;
-    let mut opts = SequenceOptions {
-        max_frames: args.frames.or(file.max_frames),
+    let solver = args.solver.load()?;
+    let opts = SequenceOptions {
+        max_frames: args.frames.or(solver.max_frames),
         attachment: match args.attach {
             AttachArg::Top => Attachment::TopOpening,
             AttachArg::None => Attachment::None,
         },
-        ..file
+        ..solver
     };
-    if let Some(s) = args.substeps {
-        opts.substeps = s;
-    }
-    if let Some(w) = args.warmup {
-        opts.warmup_frames = w;
-    }
     // The directory is made when there is something to write (a failed run leaves
     // nothing behind); a path that cannot be one is refused before the simulation.
     if args.out.exists() && !args.out.is_dir() {
@@ -178,23 +161,45 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
 }
 
-/// `SequenceOptions::default()` with the TOML file at `path` laid over it
-/// ([`weft_config::overlay`]: unknown keys refused, naming the file and the key).
-pub fn sequence_options(path: Option<&Path>) -> Result<SequenceOptions> {
-    let defaults = SequenceOptions::default();
-    let Some(path) = path else {
-        return Ok(defaults);
-    };
-    let text = weft_mesh::io::read_input_to_string(path)
-        .with_context(|| format!("--options {}", path.display()))?;
-    let table = weft_config::parse_table(&text)
-        .map_err(|message| anyhow::anyhow!("--options {}: {message}", path.display()))?;
-    Ok(weft_config::overlay(
-        &defaults,
-        &table,
-        &path.display().to_string(),
-        "",
-    )?)
+/// `--options`, `--substeps` and `--warmup`: the simulator's settings, for `weft
+/// simulate` and `weft bench simulate` alike.
+#[derive(Args)]
+pub struct SolverArgs {
+    /// The simulator's options as TOML (`substeps`, `warmup_frames`, `skinning`, a
+    /// `[sim]` table with `[sim.newton]`, …: the keys of `weft_sim::SequenceOptions`),
+    /// laid over the defaults; the other flags override it. An unknown key is refused.
+    #[arg(long, value_name = "FILE.toml")]
+    options: Option<PathBuf>,
+    /// Implicit-Euler steps per frame (1 to 100; default 4).
+    #[arg(long, value_parser = super::substeps)]
+    substeps: Option<usize>,
+    /// Warm-up frames before the first output frame (rest pose → first pose; 0 to
+    /// 10000, default 15).
+    #[arg(long, value_parser = super::warmup_frames)]
+    warmup: Option<usize>,
+}
+
+impl SolverArgs {
+    /// `SequenceOptions::default()` with the `--options` file laid over it
+    /// ([`weft_config::overlay`]: unknown keys refused, naming the file and the key),
+    /// then `--substeps` and `--warmup`.
+    pub fn load(&self) -> Result<SequenceOptions> {
+        let mut opts = SequenceOptions::default();
+        if let Some(path) = &self.options {
+            let text = weft_mesh::io::read_input_to_string(path)
+                .with_context(|| format!("--options {}", path.display()))?;
+            let table = weft_config::parse_table(&text)
+                .map_err(|message| anyhow::anyhow!("--options {}: {message}", path.display()))?;
+            opts = weft_config::overlay(&opts, &table, &path.display().to_string(), "")?;
+        }
+        if let Some(s) = self.substeps {
+            opts.substeps = s;
+        }
+        if let Some(w) = self.warmup {
+            opts.warmup_frames = w;
+        }
+        Ok(opts)
+    }
 }
 
 /// What the run was, for stats.json and the summary.
