@@ -78,7 +78,7 @@ fn small_config() -> DataConfig {
 #[test]
 fn print_config_writes_a_preset_that_reads_back() {
     let dir = scratch("print");
-    for preset in ["tiny", "paper"] {
+    for preset in ["tiny", "small", "paper"] {
         let o = weft(&["data", "generate", "--preset", preset, "--print-config"]);
         assert!(o.status.success(), "{}", stderr(&o));
         let text = stdout(&o);

@@ -146,7 +146,7 @@ impl Default for DataConfig {
 }
 
 /// Names of the presets, for the CLI's help and errors.
-pub const PRESET_NAMES: [&str; 2] = ["tiny", "paper"];
+pub const PRESET_NAMES: [&str; 3] = ["tiny", "small", "paper"];
 
 fn garment(kind: &str, vertices: usize, seed: u64) -> GarmentSpec {
     GarmentSpec {
@@ -171,6 +171,7 @@ impl DataConfig {
     pub fn preset(name: &str) -> Result<Self, DataError> {
         match name {
             "tiny" => Ok(Self::tiny()),
+            "small" => Ok(Self::small()),
             "paper" => Ok(Self::paper()),
             _ => Err(DataError::config(
                 "preset",
@@ -237,6 +238,86 @@ impl DataConfig {
                     MotionSpec {
                         amplitude: Some(1.1),
                         ..motion("dance", 13, None)
+                    },
+                ],
+            },
+            ..DataConfig::default()
+        }
+    }
+
+    /// Between [`tiny`](Self::tiny) and [`paper`](Self::paper), to see what more data
+    /// buys on this machine (generates in minutes here; docs/benchmarks.md, "Datasets"):
+    /// the same three garment kinds as tiny, six of each (500–1 000 vertices, other
+    /// styles than tiny's), six train shapes, sixteen motion clips (two of each kind),
+    /// each pair on three of them: 324 train sequences of 40 frames, 7.2× tiny's.
+    /// Validation: two unseen garments on an unseen shape and two clips; test: one
+    /// unseen garment of each kind on two unseen shapes and three clips no training pair
+    /// used (a twist, a larger dance and a faster walk).
+    pub fn small() -> Self {
+        let kinds = [
+            "walk",
+            "dance",
+            "kick",
+            "run",
+            "jump",
+            "bow",
+            "raise-arms",
+            "twist",
+        ];
+        let garment_kinds = ["skirt", "dress", "tshirt"];
+        let sizes = [500, 650, 800, 1000, 700, 900];
+        let garments = |first: u64, count: u64| -> Vec<GarmentSpec> {
+            (first..first + count)
+                .map(|i| {
+                    garment(
+                        garment_kinds[i as usize % garment_kinds.len()],
+                        sizes[i as usize % sizes.len()],
+                        i,
+                    )
+                })
+                .collect()
+        };
+        DataConfig {
+            frames: 40,
+            train: SplitConfig {
+                betas: vec![
+                    vec![0.0, 0.0],
+                    vec![1.5, -0.5],
+                    vec![-1.0, 1.0],
+                    vec![-1.8, -1.2],
+                    vec![0.8, 1.6],
+                    vec![2.0, 0.4],
+                ],
+                random_bodies: 0,
+                motions_per_pair: 3,
+                garments: garments(100, 18),
+                motions: kinds
+                    .iter()
+                    .zip(100..)
+                    .flat_map(|(k, seed)| [motion(k, seed, None), motion(k, seed + 50, None)])
+                    .collect(),
+            },
+            validation: SplitConfig {
+                betas: vec![],
+                random_bodies: 1,
+                motions_per_pair: 0,
+                garments: garments(118, 2),
+                motions: vec![motion("kick", 160, None), motion("walk", 161, None)],
+            },
+            test: SplitConfig {
+                betas: vec![],
+                random_bodies: 2,
+                motions_per_pair: 0,
+                garments: garments(120, 3),
+                motions: vec![
+                    motion("twist", 170, None),
+                    MotionSpec {
+                        amplitude: Some(1.1),
+                        ..motion("dance", 171, None)
+                    },
+                    MotionSpec {
+                        speed: Some(1.6),
+                        ..motion("walk", 172, None)
                     },
                 ],
             },
@@ -581,6 +662,33 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("framez"), "{err}");
+    }
+
+    #[test]
+    fn small_sits_between_tiny_and_paper() {
+        let sequences = |c: &DataConfig| {
+            let s = &c.train;
+            s.garments.len() * (s.betas.len() + s.random_bodies) * s.motions_per_pair
+        };
+        let small = DataConfig::small();
+        small.validate().unwrap();
+        assert_eq!(sequences(&small), 324);
+        assert!(sequences(&DataConfig::tiny()) < sequences(&small));
+        // Its test split shares no clip with training, and no style with tiny's.
+        let seeds =
+            |s: &SplitConfig| -> Vec<u64> { s.motions.iter().filter_map(|m| m.seed).collect() };
+        assert!(seeds(&small.test)
+            .iter()
+            .all(|m| !seeds(&small.train).contains(m)));
+        let styles = |c: &DataConfig| -> Vec<u64> {
+            [&c.train, &c.validation, &c.test]
+                .iter()
+                .flat_map(|s| s.garments.iter().filter_map(|g| g.seed))
+                .collect()
+        };
+        assert!(styles(&small)
+            .iter()
+            .all(|g| !styles(&DataConfig::tiny()).contains(g)));
     }
 
     #[test]
