@@ -52,6 +52,12 @@ impl Phase {
     pub fn weighted_terms(self, w: &TermWeights, cfg: &ScheduleConfig) -> Vec<(Term, f64)> {
         let s = cfg.supervised_scale;
         let mut terms = match self {
+            Phase::Supervised if cfg.collision_in_step_1 => vec![
+                (Term::Vertex, w.vertex),
+                (Term::Edge, w.edge),
+                (Term::Normal, w.normal),
+                (Term::Collision, w.collision),
+            ],
             Phase::Supervised => vec![
                 (Term::Vertex, w.vertex),
                 (Term::Edge, w.edge),
@@ -97,6 +103,10 @@ pub struct ScheduleConfig {
     pub supervised_max_fraction: Option<f64>,
     /// Activate stretch and shear at this fraction of the run's steps at the latest.
     pub physics_max_fraction: Option<f64>,
+    /// Also train the collision term (its full weight) in step 1, with every parameter
+    /// (paper: false; it activates it in step 2 only, where a single M^mp submodule
+    /// trains).
+    pub collision_in_step_1: bool,
 }
 
 impl Default for ScheduleConfig {
@@ -110,6 +120,7 @@ impl Default for ScheduleConfig {
             supervised_scale: 0.1,
             supervised_max_fraction: None,
             physics_max_fraction: None,
+            collision_in_step_1: false,
         }
     }
 }
@@ -375,6 +386,14 @@ mod tests {
         let f = Phase::FullPhysics.weighted_terms(&w, &cfg);
         assert_eq!(f.len(), 6);
         assert!(Phase::Physics.is_frozen() && !Phase::Supervised.is_frozen());
+        let early = ScheduleConfig {
+            collision_in_step_1: true,
+            ..cfg
+        };
+        assert_eq!(
+            Phase::Supervised.weighted_terms(&w, &early).last(),
+            Some(&(Term::Collision, w.collision))
+        );
     }
 
     #[test]
