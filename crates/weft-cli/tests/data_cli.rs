@@ -254,7 +254,7 @@ fn bad_input_is_one_line_naming_the_problem() {
                     "--out".into(),
                     out.clone(),
                 ],
-                "tiny, paper",
+                "tiny, small, paper",
             ),
             (
                 vec![

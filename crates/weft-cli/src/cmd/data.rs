@@ -23,7 +23,8 @@ pub enum DataCommand {
 
 #[derive(Args)]
 pub struct GenerateArgs {
-    /// A built-in config: tiny (minutes on a laptop) or paper (seed 000's proportions).
+    /// A built-in config: tiny (a minute on a laptop), small (7× tiny's training data,
+    /// minutes) or paper (seed 000's proportions).
     #[arg(long, conflicts_with = "config")]
     preset: Option<String>,
     /// A dataset config (TOML); see `--print-config` for every field.
