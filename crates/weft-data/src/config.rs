@@ -148,6 +148,18 @@ impl Default for DataConfig {
 /// Names of the presets, for the CLI's help and errors.
 pub const PRESET_NAMES: [&str; 3] = ["tiny", "small", "paper"];
 
+/// The eight procedural motion kinds, each in the training split of `tiny` and `small`.
+const MOTION_KINDS: [&str; 8] = [
+    "walk",
+    "dance",
+    "kick",
+    "run",
+    "jump",
+    "bow",
+    "raise-arms",
+    "twist",
+];
+
 fn garment(kind: &str, vertices: usize, seed: u64) -> GarmentSpec {
     GarmentSpec {
         kind: kind.into(),
@@ -155,6 +167,19 @@ fn garment(kind: &str, vertices: usize, seed: u64) -> GarmentSpec {
         seed: Some(seed),
         material: None,
     }
+}
+
+/// Garments with style seeds `first..first + count`, kinds and sizes taken in turn by seed.
+fn garment_cycle(kinds: &[&str], sizes: &[usize], first: u64, count: u64) -> Vec<GarmentSpec> {
+    (first..first + count)
+        .map(|i| {
+            garment(
+                kinds[i as usize % kinds.len()],
+                sizes[i as usize % sizes.len()],
+                i,
+            )
+        })
+        .collect()
 }
 
 fn motion(kind: &str, seed: u64, frames: Option<usize>) -> MotionSpec {
@@ -189,16 +214,6 @@ impl DataConfig {
     /// come from CMU sequences no training pair used but of the same kinds of motion, the
     /// splits share no clip, not no kind. Timings: docs/benchmarks.md ("Datasets").
     pub fn tiny() -> Self {
-        let kinds = [
-            "walk",
-            "dance",
-            "kick",
-            "run",
-            "jump",
-            "bow",
-            "raise-arms",
-            "twist",
-        ];
         DataConfig {
             frames: 40,
             train: SplitConfig {
@@ -212,7 +227,7 @@ impl DataConfig {
                     garment("skirt", 800, 4),
                     garment("tshirt", 550, 5),
                 ],
-                motions: kinds
+                motions: MOTION_KINDS
                     .iter()
                     .zip(1..)
                     .map(|(k, seed)| motion(k, seed, None))
@@ -254,28 +269,13 @@ impl DataConfig {
     /// unseen garment of each kind on two unseen shapes and three clips no training pair
     /// used (a twist, a larger dance and a faster walk).
     pub fn small() -> Self {
-        let kinds = [
-            "walk",
-            "dance",
-            "kick",
-            "run",
-            "jump",
-            "bow",
-            "raise-arms",
-            "twist",
-        ];
-        let garment_kinds = ["skirt", "dress", "tshirt"];
-        let sizes = [500, 650, 800, 1000, 700, 900];
-        let garments = |first: u64, count: u64| -> Vec<GarmentSpec> {
-            (first..first + count)
-                .map(|i| {
-                    garment(
-                        garment_kinds[i as usize % garment_kinds.len()],
-                        sizes[i as usize % sizes.len()],
-                        i,
-                    )
-                })
-                .collect()
+        let garments = |first, count| {
+            garment_cycle(
+                &["skirt", "dress", "tshirt"],
+                &[500, 650, 800, 1000, 700, 900],
+                first,
+                count,
+            )
         };
         DataConfig {
             frames: 40,
@@ -291,7 +291,7 @@ impl DataConfig {
                 random_bodies: 0,
                 motions_per_pair: 3,
                 garments: garments(100, 18),
-                motions: kinds
+                motions: MOTION_KINDS
                     .iter()
                     .zip(100..)
                     .flat_map(|(k, seed)| [motion(k, seed, None), motion(k, seed + 50, None)])
@@ -331,18 +331,13 @@ impl DataConfig {
     /// random test shapes, and about 50 000 / 3 000 / 8 000 poses: every garment–shape
     /// pair is simulated on one motion (100 frames in train, 200 in validation and test).
     pub fn paper() -> Self {
-        let kinds = ["dress", "jumpsuit", "dress", "skirt"];
-        let sizes = [2000, 3000, 4000, 6000, 2500];
-        let garments = |first: u64, count: u64| -> Vec<GarmentSpec> {
-            (first..first + count)
-                .map(|i| {
-                    garment(
-                        kinds[i as usize % kinds.len()],
-                        sizes[i as usize % sizes.len()],
-                        i,
-                    )
-                })
-                .collect()
+        let garments = |first, count| {
+            garment_cycle(
+                &["dress", "jumpsuit", "dress", "skirt"],
+                &[2000, 3000, 4000, 6000, 2500],
+                first,
+                count,
+            )
         };
         let grid = [-2.0, -2.0 / 3.0, 2.0 / 3.0, 2.0];
         let mut train_betas = vec![vec![0.0, 0.0]];

@@ -52,17 +52,17 @@ impl Phase {
     pub fn weighted_terms(self, w: &TermWeights, cfg: &ScheduleConfig) -> Vec<(Term, f64)> {
         let s = cfg.supervised_scale;
         let mut terms = match self {
-            Phase::Supervised if cfg.collision_in_step_1 => vec![
-                (Term::Vertex, w.vertex),
-                (Term::Edge, w.edge),
-                (Term::Normal, w.normal),
-                (Term::Collision, w.collision),
-            ],
-            Phase::Supervised => vec![
-                (Term::Vertex, w.vertex),
-                (Term::Edge, w.edge),
-                (Term::Normal, w.normal),
-            ],
+            Phase::Supervised => {
+                let mut t = vec![
+                    (Term::Vertex, w.vertex),
+                    (Term::Edge, w.edge),
+                    (Term::Normal, w.normal),
+                ];
+                if cfg.collision_in_step_1 {
+                    t.push((Term::Collision, w.collision));
+                }
+                t
+            }
             Phase::Physics | Phase::FullPhysics => vec![
                 (Term::Vertex, s * w.vertex),
                 (Term::Edge, s * w.edge),
