@@ -600,12 +600,19 @@ fn write_garment_templates(
 type MotionKey = (String, Option<String>);
 
 fn motion_key(manifest: &Manifest, s: &SequenceRecord) -> MotionKey {
-    let file = manifest
-        .motions
-        .iter()
-        .find(|m| m.id == s.motion_id)
-        .is_some_and(|m| matches!(m.origin, MotionOrigin::File { .. }));
+    match motion_record(manifest, s) {
+        Some(record) => key_of(record, s),
+        None => (s.motion_id.clone(), None),
+    }
+}
+
+fn key_of(record: &MotionRecord, s: &SequenceRecord) -> MotionKey {
+    let file = matches!(record.origin, MotionOrigin::File { .. });
     (s.motion_id.clone(), file.then(|| s.body_id.clone()))
+}
+
+fn motion_record<'m>(manifest: &'m Manifest, s: &SequenceRecord) -> Option<&'m MotionRecord> {
+    manifest.motions.iter().find(|m| m.id == s.motion_id)
 }
 
 /// The motions of the sequences `owns` picks, each built once (file motions once per
@@ -620,19 +627,14 @@ fn build_motions(
 ) -> Result<BTreeMap<MotionKey, Motion>, DataError> {
     let mut wanted: BTreeMap<MotionKey, (&MotionRecord, Vec<f64>)> = BTreeMap::new();
     for s in manifest.sequences.iter().filter(|s| owns(s.index)) {
-        let key = motion_key(manifest, s);
-        if let std::collections::btree_map::Entry::Vacant(slot) = wanted.entry(key) {
-            let record = manifest
-                .motions
-                .iter()
-                .find(|m| m.id == s.motion_id)
-                .ok_or_else(|| DataError::UnknownId {
-                    kind: "motion",
-                    id: s.motion_id.clone(),
-                    dir: out.to_path_buf(),
-                })?;
-            slot.insert((record, betas_f64(&s.betas)));
-        }
+        let record = motion_record(manifest, s).ok_or_else(|| DataError::UnknownId {
+            kind: "motion",
+            id: s.motion_id.clone(),
+            dir: out.to_path_buf(),
+        })?;
+        wanted
+            .entry(key_of(record, s))
+            .or_insert_with(|| (record, betas_f64(&s.betas)));
     }
     wanted
         .into_par_iter()
