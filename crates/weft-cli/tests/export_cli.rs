@@ -44,6 +44,14 @@ fn setup(dir: &Path) -> (PathBuf, PathBuf, Frames) {
     (template, npy, frames)
 }
 
+/// `weft export --frames FRAMES --faces TEMPLATE --format FORMAT --out OUT EXTRA…`.
+fn export(frames: &Path, template: &Path, format: &str, out: &Path, extra: &[&str]) -> Output {
+    let mut a = vec!["export", "--frames", s(frames), "--faces", s(template)];
+    a.extend_from_slice(&["--format", format, "--out", s(out)]);
+    a.extend_from_slice(extra);
+    weft(&a)
+}
+
 /// One line on stderr starting `error:`, exit status 1, and the line contains `needle`.
 fn assert_one_line_error(o: &Output, needle: &str) {
     let e = stderr(o);
@@ -62,22 +70,10 @@ fn every_format_round_trips() {
         ("pc2", "a.pc2"),
         ("mdd", "a.mdd"),
         ("glb", "a.glb"),
+        ("usd", "a.usda"),
     ] {
         let out = dir.join(out);
-        let o = weft(&[
-            "export",
-            "--frames",
-            s(&npy),
-            "--faces",
-            s(&template),
-            "--format",
-            format,
-            "--fps",
-            "25",
-            "--out",
-            s(&out),
-            "--json",
-        ]);
+        let o = export(&npy, &template, format, &out, &["--fps", "25", "--json"]);
         assert!(o.status.success(), "{format}: {}", stderr(&o));
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         assert_eq!(
@@ -92,6 +88,15 @@ fn every_format_round_trips() {
                 let m = read_mdd(&out).unwrap();
                 assert_eq!(m.frames, frames);
                 assert_eq!(m.times[1], 0.04);
+            }
+            "usd" => {
+                let text = std::fs::read_to_string(&out).unwrap();
+                assert!(text.contains("timeCodesPerSecond = 25\n"), "{text}");
+                assert!(text.contains("point3f[] points.timeSamples = {"), "{text}");
+                assert!(
+                    !text.contains("primvars:st"),
+                    "the template has no UVs: {text}"
+                );
             }
             _ => {
                 let g = read_glb(&out).unwrap();
@@ -189,7 +194,59 @@ fn glb_with_a_body() {
         "--body",
         s(&body),
     ]);
-    assert_one_line_error(&o, "apply to --format glb only");
+    assert_one_line_error(&o, "apply to --format glb and usd only");
+}
+
+/// Issue 18: every export keeps the template's UVs (obj, glb, usd); the point caches
+/// apply to the template, which keeps its own.
+#[test]
+fn the_templates_uvs_go_into_obj_glb_and_usd() {
+    let dir = scratch("uvs");
+    let (_, npy, frames) = setup(&dir);
+    // The grid's 6 vertices with a seam: the second column's UVs differ per quad.
+    let template = dir.join("uv.obj");
+    std::fs::write(
+        &template,
+        "v 0 0 0\nv 0.5 0 0\nv 1 0 0\nv 0 0 0.5\nv 0.5 0 0.5\nv 1 0 0.5\n\
+         vt 0 0\nvt 0.5 0\nvt 0 1\nvt 0.5 1\nvt 2 0\nvt 3 0\nvt 2 1\nvt 3 1\n\
+         f 1/1 4/3 5/4\nf 1/1 5/4 2/2\nf 2/5 5/7 6/8\nf 2/5 6/8 3/6\n",
+    )
+    .unwrap();
+    let uvs = weft_mesh::io::load_obj(&template)
+        .unwrap()
+        .corner_uvs
+        .unwrap();
+    for (format, out) in [("obj", "seq"), ("glb", "a.glb"), ("usd", "a.usda")] {
+        let out = dir.join(out);
+        let o = export(&npy, &template, format, &out, &["--json"]);
+        assert!(o.status.success(), "{format}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["uvs"], true, "{format}");
+        match format {
+            "obj" => {
+                let r = weft_mesh::io::load_obj(&out.join("frame_00003.obj")).unwrap();
+                assert_eq!(r.corner_uvs.unwrap(), uvs);
+                assert_eq!(read_obj_sequence(&out).unwrap(), frames);
+            }
+            "glb" => {
+                let g = read_glb(&out).unwrap();
+                // Vertices 1 and 4 sit on the seam: 6 + 2 glTF vertices.
+                assert_eq!(g.meshes[0].frames.vertex_count(), 8);
+                let t = g.meshes[0].texcoords.as_ref().unwrap();
+                let corner = g.meshes[0].faces[2][0] as usize;
+                assert_eq!(t[corner], [2.0, 1.0]); // (2, 0) with V flipped
+            }
+            _ => {
+                let text = std::fs::read_to_string(&out).unwrap();
+                assert!(
+                    text.contains(
+                        "int[] primvars:st:indices = [0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7]"
+                    ),
+                    "{text}"
+                );
+            }
+        }
+    }
 }
 
 #[test]
@@ -228,7 +285,7 @@ fn bad_input_is_one_line_and_leaves_nothing() {
     v[(6 + 4) * 3 + 1] = f32::NAN;
     let nan = dir.join("nan.npy");
     write_npy(&nan, &[2, 6, 3], &v).unwrap();
-    for format in ["obj", "pc2", "mdd", "glb"] {
+    for format in ["obj", "pc2", "mdd", "glb", "usd"] {
         let o = run(&nan, format, &out, "30");
         assert_one_line_error(&o, "frame 1, vertex 4: the y coordinate is NaN");
     }
@@ -236,7 +293,11 @@ fn bad_input_is_one_line_and_leaves_nothing() {
     // Unknown format, bad fps.
     assert_one_line_error(
         &run(&npy, "fbx", &out, "30"),
-        "unknown export format `fbx`; expected one of obj, pc2, mdd, glb",
+        "unknown export format `fbx`; expected one of obj, pc2, mdd, glb, usd",
+    );
+    assert_one_line_error(
+        &run(&npy, "usd", &out_dir.join("a.usdc"), "30"),
+        "weft writes USD as text (.usda or .usd)",
     );
     assert_one_line_error(
         &run(&npy, "pc2", &out, "0"),

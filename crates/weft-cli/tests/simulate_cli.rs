@@ -45,9 +45,19 @@ fn simulate_writes_frames_npy_pc2_obj_and_stats() {
         "--out",
         s(&out),
         "--obj",
+        "--usd",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("3 frames of"), "{}", stdout(&o));
+    // The garment's UVs (weft garment generate writes them) survive into obj/ and USD;
+    // the USD scene holds the garment and the walking body, 3 time samples each.
+    let uvs = weft_mesh::io::load_obj(&g).unwrap().corner_uvs.unwrap();
+    let first = weft_mesh::io::load_obj(&out.join("obj/frame_00000.obj")).unwrap();
+    assert_eq!(first.corner_uvs.unwrap(), uvs);
+    let usd = std::fs::read_to_string(out.join("scene.usda")).expect("usd");
+    assert_eq!(usd.matches("points.timeSamples = {").count(), 2, "{usd}");
+    assert!(usd.contains("def Mesh \"garment\"") && usd.contains("def Mesh \"body\""));
+    assert!(usd.contains("primvars:st:indices") && usd.contains("endTimeCode = 2\n"));
     // PC2: 32-byte header, then frames × vertices × 3 f32.
     let pc2 = std::fs::metadata(out.join("frames.pc2"))
         .expect("pc2")
@@ -196,14 +206,16 @@ fn outputs_are_all_or_nothing_and_bounds_hold() {
     );
     assert!(!dir.join("a").exists(), "a failed run left a directory");
 
-    let o = run(&g, &["--obj"]);
+    let o = run(&g, &["--obj", "--usd"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.join("obj/frame_00000.obj").is_file());
+    assert!(out.join("scene.usda").is_file());
     let o = run(&g, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         !out.join("obj").exists(),
         "stale obj/ left beside new frames"
     );
+    assert!(!out.join("scene.usda").exists(), "stale scene.usda left");
     assert!(stderr(&o).contains("removed"), "{}", stderr(&o));
 }

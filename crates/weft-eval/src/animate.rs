@@ -9,8 +9,10 @@ use std::path::Path;
 
 use weft_body::BodyModel;
 use weft_body::PosedSequence;
-use weft_mesh::export::gltf::{write_glb, GlbMesh, GlbOptions, BODY_COLOR, GARMENT_COLOR};
-use weft_mesh::export::{export, ExportFormat, Frames};
+use weft_mesh::export::{
+    check_template, validate_fps, write_scene, AnimatedMesh, CornerUvs, ExportFormat, Frames,
+    BODY_COLOR, GARMENT_COLOR,
+};
 use weft_mesh::TriMesh;
 use weft_models::{Clip, Deformer};
 use weft_motion::{
@@ -148,11 +150,13 @@ pub fn push_out_of_body(
     Ok(moved)
 }
 
-/// Writes `frames` of `garment` to `out` in `format` at `fps`; for glb, `body` (faces and
-/// frames) is added as a second animated mesh.
+/// Writes `frames` of `garment` (with its corner `uvs`, when it has them) to `out` in
+/// `format` at `fps`; for the scene formats (glb, usd), `body` (faces and frames) is
+/// added as a second animated mesh.
 pub fn write_animation(
     format: ExportFormat,
     garment: &TriMesh,
+    uvs: Option<&CornerUvs>,
     frames: &[Vec<[f32; 3]>],
     fps: f64,
     body: Option<BodyFrames<'_>>,
@@ -160,35 +164,31 @@ pub fn write_animation(
 ) -> Result<(), EvalError> {
     let export_err = |e: weft_mesh::export::ExportError| EvalError::Invalid(format!("export: {e}"));
     let g = Frames::from_frames(frames).map_err(export_err)?;
-    match (format, body) {
-        (ExportFormat::Glb, Some((faces, body_frames))) => {
-            let b = Frames::from_frames(body_frames).map_err(export_err)?;
-            g.check_finite().map_err(export_err)?;
-            write_glb(
-                out,
-                &[
-                    GlbMesh {
-                        name: "garment",
-                        faces: &garment.faces,
-                        frames: &g,
-                        color: GARMENT_COLOR,
-                    },
-                    GlbMesh {
-                        name: "body",
-                        faces,
-                        frames: &b,
-                        color: BODY_COLOR,
-                    },
-                ],
-                GlbOptions {
-                    fps: fps as f32,
-                    normals: true,
-                },
-            )
-            .map_err(export_err)
+    check_template(garment, &g).map_err(export_err)?;
+    validate_fps(fps as f32).map_err(export_err)?;
+    let b = match body {
+        Some((_, body_frames)) if format.holds_scene() => {
+            Some(Frames::from_frames(body_frames).map_err(export_err)?)
         }
-        _ => export(format, garment, &g, fps as f32, out).map_err(export_err),
+        _ => None,
+    };
+    let mut meshes = vec![AnimatedMesh {
+        name: "garment",
+        faces: &garment.faces,
+        uvs,
+        frames: &g,
+        color: GARMENT_COLOR,
+    }];
+    if let (Some((faces, _)), Some(b)) = (body, &b) {
+        meshes.push(AnimatedMesh {
+            name: "body",
+            faces,
+            uvs: None,
+            frames: b,
+            color: BODY_COLOR,
+        });
     }
+    write_scene(format, &meshes, fps as f32, out).map_err(export_err)
 }
 
 #[cfg(test)]

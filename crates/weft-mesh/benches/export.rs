@@ -71,7 +71,7 @@ fn bench_export(c: &mut Criterion) {
         group.bench_function(format.name(), |b| {
             b.iter_batched(
                 || remove(&out),
-                |()| export(format, &garment, &frames, 30.0, &out).expect("export"),
+                |()| export(format, &garment, None, &frames, 30.0, &out).expect("export"),
                 BatchSize::PerIteration,
             )
         });

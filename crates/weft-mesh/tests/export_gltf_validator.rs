@@ -8,10 +8,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use weft_mesh::export::gltf::{write_glb, GlbMesh, GlbOptions, BODY_COLOR, GARMENT_COLOR};
-use weft_mesh::export::Frames;
-use weft_mesh::primitives::{builtin_garment, cylinder};
-use weft_mesh::TriMesh;
+use weft_mesh::export::gltf::{write_glb, GlbOptions};
+use weft_mesh::export::AnimatedMesh;
+
+mod common;
+use common::{frames_of, Scene};
 
 fn validator() -> Option<(PathBuf, PathBuf)> {
     let tools = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/gltf-validator");
@@ -33,23 +34,6 @@ fn validator() -> Option<(PathBuf, PathBuf)> {
         return None;
     }
     Some((PathBuf::from("node"), script))
-}
-
-fn frames_of(mesh: &TriMesh, t: usize, amplitude: f64) -> Frames {
-    let mut f = Frames::with_vertex_count(mesh.vertex_count()).unwrap();
-    for k in 0..t {
-        let phase = k as f64 * 0.2;
-        let p: Vec<[f64; 3]> = mesh
-            .positions
-            .iter()
-            .map(|p| {
-                let s = 1.0 + amplitude * (phase + 8.0 * p[1]).sin();
-                [p[0] * s, p[1] + 0.01 * phase.sin(), p[2] * s]
-            })
-            .collect();
-        f.push_frame_f64(&p).unwrap();
-    }
-    f
 }
 
 fn validate(node: &Path, script: &Path, glb: &Path) {
@@ -77,73 +61,30 @@ fn glb_files_pass_the_khronos_validator() {
     std::fs::create_dir_all(&dir).unwrap();
 
     // The built-in garment animated over 24 frames, over a body animated with it.
-    let garment = builtin_garment();
-    let body = cylinder(30, 40, 0.25, 0.05);
-    let gf = frames_of(&garment, 24, 0.05);
-    let bf = frames_of(&body, 24, 0.01);
+    let scene = Scene::new(24);
     let both = dir.join("garment_body.glb");
-    write_glb(
-        &both,
-        &[
-            GlbMesh {
-                name: "garment",
-                faces: &garment.faces,
-                frames: &gf,
-                color: GARMENT_COLOR,
-            },
-            GlbMesh {
-                name: "body",
-                faces: &body.faces,
-                frames: &bf,
-                color: BODY_COLOR,
-            },
-        ],
-        GlbOptions {
-            fps: 30.0,
-            normals: true,
-        },
-    )
-    .unwrap();
+    let options = GlbOptions {
+        fps: 30.0,
+        normals: true,
+    };
+    write_glb(&both, &scene.meshes(), options).unwrap();
     validate(&node, &script, &both);
 
-    // Without normals, with a static body, and a single static frame.
-    let still = frames_of(&body, 1, 0.0);
+    // Without normals or UVs, with a static body, and a single static frame.
+    let still = frames_of(&scene.body, 1, 0.0);
     let variants = dir.join("static_body.glb");
-    write_glb(
-        &variants,
-        &[
-            GlbMesh {
-                name: "garment",
-                faces: &garment.faces,
-                frames: &gf,
-                color: GARMENT_COLOR,
-            },
-            GlbMesh {
-                name: "body",
-                faces: &body.faces,
-                frames: &still,
-                color: BODY_COLOR,
-            },
-        ],
-        GlbOptions {
-            fps: 24.0,
-            normals: false,
-        },
-    )
-    .unwrap();
+    let garment = AnimatedMesh {
+        uvs: None,
+        ..scene.garment_mesh(&scene.uvs)
+    };
+    let options = GlbOptions {
+        fps: 24.0,
+        normals: false,
+    };
+    write_glb(&variants, &[garment, scene.body_mesh(&still)], options).unwrap();
     validate(&node, &script, &variants);
     let single = dir.join("single.glb");
-    write_glb(
-        &single,
-        &[GlbMesh {
-            name: "body",
-            faces: &body.faces,
-            frames: &still,
-            color: BODY_COLOR,
-        }],
-        GlbOptions::default(),
-    )
-    .unwrap();
+    write_glb(&single, &[scene.body_mesh(&still)], GlbOptions::default()).unwrap();
     validate(&node, &script, &single);
 
     let _ = std::fs::remove_dir_all(&dir);

@@ -252,12 +252,18 @@ pub fn run_demo(
     let betas64: Vec<f64> = UNSEEN_BETAS.iter().map(|&b| f64::from(b)).collect();
     let (kind, seed, vertices) = UNSEEN_GARMENT;
     let vertices = if opts.quick { 320 } else { vertices };
-    let garment = FitBody::new(&body, &betas64)
+    let generated = FitBody::new(&body, &betas64)
         .and_then(|fit| fit.generate(kind, &Style::from_seed(kind, seed), vertices))
-        .map_err(stage("generating the unseen garment"))?
-        .mesh;
+        .map_err(stage("generating the unseen garment"))?;
     let garment_path = anim_dir.join("garment.obj");
-    weft_mesh::io::write_obj(&garment_path, &garment).map_err(stage("writing the garment"))?;
+    weft_garment::obj::write_obj(&garment_path, &generated)
+        .map_err(stage("writing the garment"))?;
+    let uvs: Vec<[[f32; 2]; 3]> = generated
+        .corner_uvs
+        .iter()
+        .map(|t| t.map(|uv| uv.map(|x| x as f32)))
+        .collect();
+    let garment = generated.mesh;
     let frames = if opts.quick { 6 } else { 60 };
     let motion = MotionSpec::parse(UNSEEN_MOTION, frames, 7, 30.0)?.load(&body, &UNSEEN_BETAS)?;
     let predictor = Predictor::load(&run_dir)?;
@@ -272,6 +278,7 @@ pub fn run_demo(
     write_animation(
         ExportFormat::Glb,
         &garment,
+        Some(&uvs),
         &animated,
         motion.fps(),
         Some((body.faces(), &body_frames)),
@@ -281,6 +288,7 @@ pub fn run_demo(
     write_animation(
         ExportFormat::Pc2,
         &garment,
+        None,
         &animated,
         motion.fps(),
         None,

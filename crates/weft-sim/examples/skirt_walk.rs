@@ -79,7 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let frames = weft_mesh::export::Frames::from_frames(&seq.frames)?;
         let dir = std::path::Path::new(&dir);
         std::fs::create_dir_all(dir)?;
-        weft_mesh::export::write_obj_sequence(&dir.join("garment"), &skirt.faces, &frames)?;
+        weft_mesh::export::write_obj_sequence(&dir.join("garment"), &skirt.faces, None, &frames)?;
         // The body at the last frame.
         let last = motion.frame_count() - 1;
         let pose: Vec<[f64; 3]> = motion.poses()[last]

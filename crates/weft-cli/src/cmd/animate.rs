@@ -1,6 +1,6 @@
 //! `weft animate`: a trained model drives any garment (unseen topology included) on a
-//! body shape through a motion, written as an OBJ sequence, PC2/MDD point cache or glTF
-//! binary.
+//! body shape through a motion, written as an OBJ sequence, PC2/MDD point cache, glTF
+//! binary or USD layer.
 
 use anyhow::{Context, Result};
 use clap::Args;
@@ -35,8 +35,9 @@ pub struct AnimateArgs {
     /// Output: a directory for obj, a file otherwise.
     #[arg(long, value_name = "PATH")]
     out: PathBuf,
-    /// obj, pc2, mdd or glb (glb also holds the animated body).
-    #[arg(long, value_name = "obj|pc2|mdd|glb")]
+    /// obj, pc2, mdd, glb or usd (glb and usd also hold the animated body; the garment's
+    /// UVs go into obj, glb and usd).
+    #[arg(long, value_name = "obj|pc2|mdd|glb|usd")]
     format: String,
     /// Post-process: move predicted vertices that are inside the posed body, or within
     /// this many millimetres of it, to its surface plus that distance. The network has
@@ -61,14 +62,15 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let betas64 = args.body.betas(&body)?;
     let betas: Vec<f32> = betas64.iter().map(|&b| b as f32).collect();
     let motion = args.motion.load(&body, &betas64, args.frames)?;
-    let garment = weft_mesh::read_mesh(&args.garment)
+    let loaded = weft_mesh::io::load_mesh(&args.garment)
         .with_context(|| format!("reading the garment {}", args.garment.display()))?;
+    let garment = loaded.mesh;
     let deformer =
         load_deformer(&args.run).with_context(|| format!("loading run {}", args.run.display()))?;
     let started = Instant::now();
     let mut frames = animate(deformer.as_ref(), &garment, &body, &betas, &motion)?;
     let seconds = started.elapsed().as_secs_f64();
-    let posed = if args.push_out.is_some() || format == ExportFormat::Glb {
+    let posed = if args.push_out.is_some() || format.holds_scene() {
         Some(PosedSequence::new(
             &body,
             &betas,
@@ -83,7 +85,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         _ => None,
     };
     let bodies = match &posed {
-        Some(posed) if format == ExportFormat::Glb => Some(
+        Some(posed) if format.holds_scene() => Some(
             (0..posed.len())
                 .filter_map(|t| posed.mesh(t))
                 .map(|m| {
@@ -99,6 +101,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     write_animation(
         format,
         &garment,
+        loaded.corner_uvs.as_deref(),
         &frames,
         motion.fps(),
         bodies.as_ref().map(|b| (body.faces(), b.as_slice())),

@@ -1,13 +1,14 @@
 //! `weft export`: a frame sequence on a template's faces, written as an OBJ sequence, a
-//! PC2 or MDD point cache, or a glTF binary with morph-target animation.
+//! PC2 or MDD point cache, a glTF binary with morph-target animation, or a USD layer with
+//! time-sampled points. The template's UVs go into every format that holds them.
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use serde_json::json;
 use std::path::{Path, PathBuf};
-use weft_mesh::export::gltf::{write_glb, GlbMesh, GlbOptions, BODY_COLOR, GARMENT_COLOR};
+use weft_mesh::export::gltf::{write_glb, GlbOptions};
 use weft_mesh::export::{
-    validate_fps, write_mdd, write_obj_sequence, write_pc2, ExportFormat, Frames, Pc2Timing,
+    validate_fps, write_scene, AnimatedMesh, ExportFormat, Frames, BODY_COLOR, GARMENT_COLOR,
 };
 use weft_mesh::io::load_mesh;
 use weft_mesh::TriMesh;
@@ -21,25 +22,27 @@ pub struct ExportArgs {
     #[arg(long, value_name = "DIR|FILE.npy")]
     frames: PathBuf,
     /// The template mesh (.obj or .ply) whose faces the frames move; its vertex order
-    /// must be the frames' vertex order.
+    /// must be the frames' vertex order. Its UVs (OBJ `vt` on every face corner) are
+    /// written into obj, glb and usd.
     #[arg(long, value_name = "G.obj")]
     faces: PathBuf,
-    /// Output format: obj (a directory of frame_NNNNN.obj), pc2, mdd or glb.
-    #[arg(long, value_name = "obj|pc2|mdd|glb")]
+    /// Output format: obj (a directory of frame_NNNNN.obj), pc2, mdd, glb or usd (text
+    /// USD, .usda or .usd).
+    #[arg(long, value_name = "obj|pc2|mdd|glb|usd")]
     format: String,
-    /// Frames per second: the MDD frame times and the glTF key times are k / fps. PC2
-    /// stores no rate (sample k is frame k).
+    /// Frames per second: the MDD frame times and the glTF key times are k / fps, and
+    /// USD's time codes per second. PC2 stores no rate (sample k is frame k).
     #[arg(long, default_value_t = 30.0)]
     fps: f32,
     /// Output: a directory for obj (created, or replaced if it holds only an earlier
     /// sequence), a file otherwise. Written atomically: a failure leaves nothing behind.
     #[arg(long, value_name = "PATH")]
     out: PathBuf,
-    /// glb only: a body mesh (.obj or .ply) added as a second mesh, static unless
+    /// glb and usd only: a body mesh (.obj or .ply) added as a second mesh, static unless
     /// --body-frames animates it.
     #[arg(long, value_name = "B.obj")]
     body: Option<PathBuf>,
-    /// glb only: the body's frames (DIR or FILE.npy), as many as the garment's.
+    /// glb and usd only: the body's frames (DIR or FILE.npy), as many as the garment's.
     #[arg(long, value_name = "DIR|FILE.npy", requires = "body")]
     body_frames: Option<PathBuf>,
     /// glb only: leave out vertex normals (smaller files; viewers shade flat).
@@ -53,52 +56,53 @@ pub struct ExportArgs {
 pub fn run(args: &ExportArgs) -> Result<()> {
     let format: ExportFormat = args.format.parse().context("--format")?;
     validate_fps(args.fps).context("--fps")?;
-    if format != ExportFormat::Glb && (args.body.is_some() || args.no_normals) {
+    if !format.holds_scene() && args.body.is_some() {
         bail!(
-            "--body, --body-frames and --no-normals apply to --format glb only, not {}",
+            "--body and --body-frames apply to --format glb and usd only, not {}",
+            format.name()
+        );
+    }
+    if format != ExportFormat::Glb && args.no_normals {
+        bail!(
+            "--no-normals applies to --format glb only, not {}",
             format.name()
         );
     }
 
-    let template = load_template(&args.faces)?;
+    let loaded = load_mesh(&args.faces)?;
+    let template = loaded.mesh;
     let frames = load_frames(&args.frames, &template, &args.faces)?;
     let body = match &args.body {
         Some(path) => Some(load_body(path, args.body_frames.as_deref())?),
         None => None,
     };
 
-    match format {
-        ExportFormat::ObjSequence => write_obj_sequence(&args.out, &template.faces, &frames)?,
-        ExportFormat::Pc2 => write_pc2(&args.out, &frames, Pc2Timing::default())?,
-        ExportFormat::Mdd => write_mdd(&args.out, &frames, args.fps)?,
-        ExportFormat::Glb => {
-            let mut meshes = vec![GlbMesh {
-                name: "garment",
-                faces: &template.faces,
-                frames: &frames,
-                color: GARMENT_COLOR,
-            }];
-            if let Some((mesh, body_frames)) = &body {
-                meshes.push(GlbMesh {
-                    name: "body",
-                    faces: &mesh.faces,
-                    frames: body_frames,
-                    color: BODY_COLOR,
-                });
-            }
-            let options = GlbOptions {
-                fps: args.fps,
-                normals: !args.no_normals,
-            };
-            write_glb(&args.out, &meshes, options)?;
-        }
+    let mut meshes = vec![AnimatedMesh {
+        name: "garment",
+        faces: &template.faces,
+        uvs: loaded.corner_uvs.as_deref(),
+        frames: &frames,
+        color: GARMENT_COLOR,
+    }];
+    if let Some((mesh, body_frames)) = &body {
+        meshes.push(AnimatedMesh {
+            name: "body",
+            faces: &mesh.faces,
+            uvs: None,
+            frames: body_frames,
+            color: BODY_COLOR,
+        });
     }
-    report(args, format, &frames)
-}
-
-/// The template: OBJ or PLY through the strict readers.
-fn load_template(path: &Path) -> Result<TriMesh> {
-    Ok(load_mesh(path)?.mesh)
+    if format == ExportFormat::Glb {
+        let options = GlbOptions {
+            fps: args.fps,
+            normals: !args.no_normals,
+        };
+        write_glb(&args.out, &meshes, options)?;
+    } else {
+        write_scene(format, &meshes, args.fps, &args.out)?;
+    }
+    report(args, format, &frames, loaded.corner_uvs.is_some())
 }
 
 /// The frames at `path`, checked against the template at `template_path`: same vertex
@@ -122,7 +126,7 @@ fn load_frames(path: &Path, template: &TriMesh, template_path: &Path) -> Result<
 
 /// The body mesh, with its frames or, without them, its own positions as one frame.
 fn load_body(path: &Path, frames: Option<&Path>) -> Result<(TriMesh, Frames)> {
-    let mesh = load_template(path)?;
+    let mesh = load_mesh(path)?.mesh;
     let frames = match frames {
         Some(f) => load_frames(f, &mesh, path)?,
         None => {
@@ -136,7 +140,7 @@ fn load_body(path: &Path, frames: Option<&Path>) -> Result<(TriMesh, Frames)> {
     Ok((mesh, frames))
 }
 
-fn report(args: &ExportArgs, format: ExportFormat, frames: &Frames) -> Result<()> {
+fn report(args: &ExportArgs, format: ExportFormat, frames: &Frames, uvs: bool) -> Result<()> {
     let bytes = output_size(&args.out, format)
         .with_context(|| format!("{}: written, but cannot be measured", args.out.display()))?;
     if args.json {
@@ -148,6 +152,7 @@ fn report(args: &ExportArgs, format: ExportFormat, frames: &Frames) -> Result<()
             "fps": args.fps,
             "bytes": bytes,
             "body": args.body,
+            "uvs": uvs && !matches!(format, ExportFormat::Pc2 | ExportFormat::Mdd),
         });
         return emit(&serde_json::to_string_pretty(&out)?);
     }

@@ -1,13 +1,17 @@
 //! `weft simulate`: a garment simulated on a body that follows a motion, written as a
-//! PC2 point cache, an .npy array `[T, N, 3]` (f32), optionally an OBJ sequence, and a
-//! per-frame statistics JSON.
+//! PC2 point cache, an .npy array `[T, N, 3]` (f32), optionally an OBJ sequence and a USD
+//! scene with the body, and a per-frame statistics JSON.
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
-use weft_mesh::export::{remove_obj_sequence, write_obj_sequence, write_pc2, Frames, Pc2Timing};
+use weft_body::{BodyModel, PosedSequence};
+use weft_mesh::export::{
+    remove_obj_sequence, write_obj_sequence, write_pc2, write_usd, AnimatedMesh, CornerUvs, Frames,
+    Pc2Timing, BODY_COLOR, GARMENT_COLOR,
+};
 use weft_mesh::io::{load_mesh, write_atomic};
 use weft_sim::{
     simulate_sequence, Attachment, FrameStats, Material, SequenceError, SequenceOptions,
@@ -28,7 +32,8 @@ pub struct SimulateArgs {
     body: BodyArgs,
     #[command(flatten)]
     motion: MotionArgs,
-    /// Output directory (created): frames.pc2, frames.npy, stats.json, obj/ with --obj.
+    /// Output directory (created): frames.pc2, frames.npy, stats.json, obj/ with --obj,
+    /// scene.usda with --usd.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
     /// Material preset: hood, silk, cotton, jersey, denim or leather.
@@ -40,9 +45,13 @@ pub struct SimulateArgs {
     /// default 60).
     #[arg(long, value_parser = super::frame_count)]
     frames: Option<usize>,
-    /// Also write an OBJ sequence to DIR/obj/.
+    /// Also write an OBJ sequence to DIR/obj/ (with the garment's UVs).
     #[arg(long)]
     obj: bool,
+    /// Also write DIR/scene.usda: the garment (with its UVs) and the posed body as
+    /// time-sampled USD meshes, Y up, metres, at the motion's frame rate.
+    #[arg(long)]
+    usd: bool,
     /// Garment vertices that follow the body's skin: `top` (the highest opening — a
     /// waistband or neckline — as a sewn-in elastic would hold it) or `none` (contact
     /// and friction only; loose templates may slide down).
@@ -61,9 +70,9 @@ const DEFAULT_PROCEDURAL_FRAMES: usize = 60;
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let material = Material::preset(&args.material).context("--material")?;
-    let garment = load_mesh(&args.garment)
-        .with_context(|| format!("reading the garment {}", args.garment.display()))?
-        .mesh;
+    let loaded = load_mesh(&args.garment)
+        .with_context(|| format!("reading the garment {}", args.garment.display()))?;
+    let garment = loaded.mesh;
     let (model, _) = args.body.load()?;
     let betas = args.body.betas(&model)?;
     let motion = args.motion.load(
@@ -123,6 +132,16 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         },
     );
     bar.finish_and_clear();
+    let betas32: Vec<f32> = betas.iter().map(|&b| b as f32).collect();
+    let body = BodyScene {
+        model: &model,
+        betas: &betas32,
+        motion: &motion,
+    };
+    let template = Template {
+        faces: &garment.faces,
+        uvs: loaded.corner_uvs.as_deref(),
+    };
     let info = Info {
         garment: &args.garment,
         body: model.source(),
@@ -134,7 +153,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     };
     match result {
         Ok(seq) => {
-            write_outputs(args, &garment.faces, &seq, &info, None)?;
+            write_outputs(args, &template, &body, &seq, &info, None)?;
             emit(&summary(args, &seq, &info))
         }
         Err(SequenceError::Diverged {
@@ -145,7 +164,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             if !finished.frames.is_empty() {
                 write_outputs(
                     args,
-                    &garment.faces,
+                    &template,
+                    &body,
                     &finished,
                     &info,
                     Some((frame, &message)),
@@ -233,9 +253,44 @@ fn totals(seq: &SimulatedSequence) -> serde_json::Value {
     })
 }
 
+/// The garment's faces and UVs, for the OBJ and USD outputs.
+struct Template<'a> {
+    faces: &'a [[u32; 3]],
+    uvs: Option<&'a CornerUvs>,
+}
+
+/// The body the garment was simulated on, posed again for the USD scene.
+struct BodyScene<'a> {
+    model: &'a BodyModel,
+    betas: &'a [f32],
+    motion: &'a weft_motion::Motion,
+}
+
+impl BodyScene<'_> {
+    /// The body's vertices at the first `frames` frames of the motion (output frame k is
+    /// motion frame k).
+    fn frames(&self, frames: usize) -> Result<Frames> {
+        let posed = PosedSequence::new(
+            self.model,
+            self.betas,
+            self.motion.poses(),
+            self.motion.trans(),
+        )?;
+        let mut out = Frames::with_vertex_count(self.model.vertex_count())?;
+        for t in 0..frames {
+            let mesh = posed
+                .mesh(t)
+                .with_context(|| format!("posing the body at frame {t}"))?;
+            out.push_frame_f64(&mesh.positions)?;
+        }
+        Ok(out)
+    }
+}
+
 fn write_outputs(
     args: &SimulateArgs,
-    faces: &[[u32; 3]],
+    template: &Template<'_>,
+    body: &BodyScene<'_>,
     seq: &SimulatedSequence,
     info: &Info<'_>,
     diverged: Option<(usize, &str)>,
@@ -249,11 +304,38 @@ fn write_outputs(
         .write_npy(&out.join("frames.npy"))
         .with_context(|| format!("writing {}", out.join("frames.npy").display()))?;
     if args.obj {
-        write_obj_sequence(&out.join("obj"), faces, &frames)?;
+        write_obj_sequence(&out.join("obj"), template.faces, template.uvs, &frames)?;
     } else if remove_obj_sequence(&out.join("obj"))? {
         eprintln!(
             "removed {}: the OBJ sequence of an earlier run (this one wrote none; --obj writes one)",
             out.join("obj").display()
+        );
+    }
+    let usd = out.join("scene.usda");
+    if args.usd {
+        let body_frames = body.frames(frames.frame_count())?;
+        let meshes = [
+            AnimatedMesh {
+                name: "garment",
+                faces: template.faces,
+                uvs: template.uvs,
+                frames: &frames,
+                color: GARMENT_COLOR,
+            },
+            AnimatedMesh {
+                name: "body",
+                faces: body.model.faces(),
+                uvs: None,
+                frames: &body_frames,
+                color: BODY_COLOR,
+            },
+        ];
+        write_usd(&usd, &meshes, info.fps as f32)?;
+    } else if usd.is_file() {
+        std::fs::remove_file(&usd).with_context(|| format!("removing {}", usd.display()))?;
+        eprintln!(
+            "removed {}: the USD scene of an earlier run (this one wrote none; --usd writes one)",
+            usd.display()
         );
     }
     let stats = json!({

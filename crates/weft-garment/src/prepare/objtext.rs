@@ -1,11 +1,12 @@
 //! New positions written into a garment's own OBJ text.
 //!
-//! weft-mesh reads only `v` and `f` (it drops `vt`), but a garment's UVs are its sewing
+//! weft-mesh's mesh holds only positions and triangles (UVs come beside it, per triangle
+//! corner, and groups and materials not at all), but a garment's UVs are its sewing
 //! pattern, the rest frames of the simulator's membrane energy. Preparation moves
-//! vertices and never changes the topology, so instead of writing a fresh OBJ it
-//! rewrites the `v` lines of the input in place: the i-th `v` statement gets the i-th
-//! position (weft-mesh keeps the file's global vertex order), and every other line —
-//! `vt`, `f v/vt`, groups, materials, comments — is kept byte for byte.
+//! vertices and never changes the topology, so instead of writing a fresh OBJ it rewrites
+//! the `v` lines of the input in place: the i-th `v` statement gets the i-th position
+//! (weft-mesh keeps the file's global vertex order), and every other line — `vt`,
+//! `f v/vt`, groups, materials, comments — is kept byte for byte.
 
 use std::path::Path;
 

@@ -45,7 +45,7 @@ pub enum ExportError {
         message: String,
     },
     /// The export format name is not one weft writes.
-    #[error("unknown export format `{name}`; expected one of obj, pc2, mdd, glb")]
+    #[error("unknown export format `{name}`; expected one of obj, pc2, mdd, glb, usd")]
     UnknownFormat {
         /// The name given.
         name: String,
@@ -147,6 +147,30 @@ pub enum ExportError {
         first: String,
         /// Its frame count.
         expected: usize,
+    },
+    /// A scene mesh's name cannot name a USD prim.
+    #[error("mesh name `{name}` is not a USD identifier; expected a letter or `_`, then letters, digits or `_`")]
+    MeshName {
+        /// The name given.
+        name: String,
+    },
+    /// The template's corner UVs do not match its faces.
+    #[error(
+        "the template has {uvs} UV triangles but {faces} faces; expected one UV per face corner"
+    )]
+    UvCount {
+        /// UV triples given.
+        uvs: usize,
+        /// Faces of the template.
+        faces: usize,
+    },
+    /// A texture coordinate is NaN or infinite.
+    #[error("face {face}, corner {corner}: the texture coordinate is not finite")]
+    NonFiniteUv {
+        /// Face index.
+        face: usize,
+        /// Corner 0, 1 or 2.
+        corner: usize,
     },
     /// An output directory that holds something other than a previous frame sequence.
     #[error("{}: {message}", .path.display())]

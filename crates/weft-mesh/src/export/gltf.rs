@@ -3,9 +3,14 @@
 //!
 //! What is written, and why:
 //!
-//! - One node and one mesh per [`GlbMesh`] (the garment, optionally the body), a single
-//!   triangle primitive with `POSITION`, optional `NORMAL` and `u32` indices, and a
-//!   double-sided material (garments are open surfaces seen from both sides).
+//! - One node and one mesh per [`AnimatedMesh`] (the garment, optionally the body), a single
+//!   triangle primitive with `POSITION`, optional `NORMAL`, `TEXCOORD_0` when the mesh has
+//!   UVs, and `u32` indices, and a double-sided material (garments are open surfaces seen
+//!   from both sides).
+//! - glTF keeps one UV per vertex, so a vertex on a UV seam is written once per distinct
+//!   UV it has (positions, morph deltas and normals copied; normals are computed on the
+//!   unsplit mesh, so the seam shades smoothly). V is flipped (`1 − v`): glTF's texture
+//!   origin is the top-left corner, OBJ's the bottom-left.
 //! - The base positions are those of frame 0. An animated mesh has **one morph target per
 //!   frame** holding that frame's position deltas from the base (and normal deltas, when
 //!   normals are written), and an animation channel on the node's `weights` with `STEP`
@@ -26,14 +31,17 @@
 //! Not written yet: the skinned variant (a skin driven by the body's joints plus per-frame
 //! corrective targets), which needs the body crate's skeleton.
 
+use std::borrow::Cow;
+use std::collections::HashMap;
 use std::io::{self, Write};
 use std::path::Path;
+use std::rc::Rc;
 
 use serde_json::{json, Value};
 
 use super::error::ExportError;
 use super::frames::bounds;
-use super::obj_sequence::check_faces;
+use super::scene::{check_scene, AnimatedMesh, IndexedUvs};
 use super::{frame_times, Frames};
 use crate::io::write_atomic;
 
@@ -51,25 +59,6 @@ const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const FLOAT: u32 = 5126;
 /// `accessor.componentType` for `u32`.
 const UNSIGNED_INT: u32 = 5125;
-
-/// One mesh of the scene: a triangle mesh whose vertices move through `frames`.
-#[derive(Clone, Copy, Debug)]
-pub struct GlbMesh<'a> {
-    /// Node and mesh name, e.g. `garment` or `body`.
-    pub name: &'a str,
-    /// Triangles as 0-based indices into each frame's vertices.
-    pub faces: &'a [[u32; 3]],
-    /// The vertex positions per frame. One frame makes a static mesh; every animated
-    /// mesh of a scene needs the same frame count.
-    pub frames: &'a Frames,
-    /// Base colour (linear RGBA) of its material.
-    pub color: [f32; 4],
-}
-
-/// The colour weft gives a garment.
-pub const GARMENT_COLOR: [f32; 4] = [0.72, 0.22, 0.18, 1.0];
-/// The colour weft gives a body.
-pub const BODY_COLOR: [f32; 4] = [0.62, 0.62, 0.62, 1.0];
 
 /// How to write a `.glb`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,7 +84,7 @@ impl Default for GlbOptions {
 /// with different frame counts, a bad `fps`, or a file over 4 GiB.
 pub fn write_glb(
     path: &Path,
-    meshes: &[GlbMesh<'_>],
+    meshes: &[AnimatedMesh<'_>],
     options: GlbOptions,
 ) -> Result<(), ExportError> {
     let doc = Document::build(meshes, options)?;
@@ -103,7 +92,7 @@ pub fn write_glb(
 }
 
 /// The `.glb` bytes in memory (for tests and small scenes); see [`write_glb`].
-pub fn glb_bytes(meshes: &[GlbMesh<'_>], options: GlbOptions) -> Result<Vec<u8>, ExportError> {
+pub fn glb_bytes(meshes: &[AnimatedMesh<'_>], options: GlbOptions) -> Result<Vec<u8>, ExportError> {
     let doc = Document::build(meshes, options)?;
     let mut out = Vec::with_capacity(doc.total_len);
     doc.write_to(&mut out)
@@ -170,35 +159,8 @@ impl<'a> Layout<'a> {
 }
 
 impl<'a> Document<'a> {
-    fn build(meshes: &[GlbMesh<'a>], options: GlbOptions) -> Result<Self, ExportError> {
-        if meshes.is_empty() {
-            return Err(ExportError::NoFrames);
-        }
-        // The shared frame count of the animated meshes.
-        let mut animated: Option<(usize, &str)> = None;
-        for m in meshes {
-            if m.frames.is_empty() {
-                return Err(ExportError::NoFrames);
-            }
-            m.frames.check_finite()?;
-            check_faces(m.faces, m.frames.vertex_count())?;
-            let t = m.frames.frame_count();
-            if t > 1 {
-                match animated {
-                    None => animated = Some((t, m.name)),
-                    Some((expected, first)) if expected != t => {
-                        return Err(ExportError::FrameCountMismatch {
-                            mesh: m.name.to_owned(),
-                            found: t,
-                            first: first.to_owned(),
-                            expected,
-                        })
-                    }
-                    Some(_) => {}
-                }
-            }
-        }
-        let frame_count = animated.map_or(1, |(t, _)| t);
+    fn build(meshes: &[AnimatedMesh<'a>], options: GlbOptions) -> Result<Self, ExportError> {
+        let frame_count = check_scene(meshes)?;
         let times = frame_times(frame_count, options.fps)?;
 
         let mut l = Layout {
@@ -212,8 +174,13 @@ impl<'a> Document<'a> {
         let mut materials = Vec::new();
         let mut animated_nodes = Vec::new();
         for (i, m) in meshes.iter().enumerate() {
-            let (attributes, targets) = mesh_data(&mut l, m, options.normals)?;
-            let indices = index_accessor(&mut l, m.faces)?;
+            let split = m.uvs.map(|uvs| SeamSplit::new(m.faces, uvs));
+            let (attributes, targets) = mesh_data(&mut l, m, split.as_ref(), options.normals)?;
+            let faces = match split {
+                Some(split) => Cow::Owned(split.faces),
+                None => Cow::Borrowed(m.faces),
+            };
+            let indices = index_accessor(&mut l, faces)?;
             materials.push(json!({
                 "name": m.name,
                 "doubleSided": true,
@@ -317,15 +284,69 @@ impl<'a> Document<'a> {
     }
 }
 
+/// A mesh's vertices split at its UV seams: every (vertex, UV) pair used by a corner
+/// becomes one glTF vertex.
+struct SeamSplit {
+    /// The source vertex of each glTF vertex.
+    source: Rc<[u32]>,
+    /// The UV of each glTF vertex, V flipped.
+    texcoords: Vec<[f32; 2]>,
+    /// The triangles over glTF vertices.
+    faces: Vec<[u32; 3]>,
+}
+
+impl SeamSplit {
+    fn new(faces: &[[u32; 3]], uvs: &super::scene::CornerUvs) -> Self {
+        let indexed = IndexedUvs::new(uvs);
+        let mut of_pair: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut source = Vec::new();
+        let mut texcoords = Vec::new();
+        let faces = faces
+            .iter()
+            .zip(&indexed.corners)
+            .map(|(f, t)| {
+                [0, 1, 2].map(|k| {
+                    *of_pair.entry((f[k], t[k])).or_insert_with(|| {
+                        let [u, v] = indexed.values[t[k] as usize];
+                        source.push(f[k]);
+                        texcoords.push([u, 1.0 - v]);
+                        (source.len() - 1) as u32
+                    })
+                })
+            })
+            .collect();
+        SeamSplit {
+            source: source.into(),
+            texcoords,
+            faces,
+        }
+    }
+}
+
+/// The values of `per_source` for each written vertex: all of them, or gathered through
+/// a seam split's sources.
+fn gather<'b, T: Copy + 'b>(
+    per_source: impl Fn(usize) -> T + 'b,
+    count: usize,
+    source: Option<&'b [u32]>,
+) -> Box<dyn Iterator<Item = T> + 'b> {
+    match source {
+        Some(s) => Box::new(s.iter().map(move |&i| per_source(i as usize))),
+        None => Box::new((0..count).map(per_source)),
+    }
+}
+
 /// Base attributes and morph targets of one mesh.
 fn mesh_data<'a>(
     l: &mut Layout<'a>,
-    m: &GlbMesh<'a>,
+    m: &AnimatedMesh<'a>,
+    split: Option<&SeamSplit>,
     with_normals: bool,
 ) -> Result<(Value, Vec<Value>), ExportError> {
     let frames = m.frames;
     let faces = m.faces;
-    let n = frames.vertex_count();
+    let source = split.map(|s| s.source.clone());
+    let n = source.as_ref().map_or(frames.vertex_count(), |s| s.len());
     let t = frames.frame_count();
     let vec3_len = n
         .checked_mul(12)
@@ -333,18 +354,36 @@ fn mesh_data<'a>(
     // Frame 0 exists: checked by the caller.
     let base = frames.frame(0).unwrap_or(&[]);
     let (lo, hi) = bounds(base).unwrap_or(([0.0; 3], [0.0; 3]));
+    let src = source.clone();
     let view = l.view(vec3_len, Some(ARRAY_BUFFER), None, move |w| {
-        write_vec3s(w, base.iter().copied())
+        write_vec3s(w, gather(|i| base[i], base.len(), src.as_deref()))
     });
     let position = l.accessor(vec3_accessor(view, 0, n, Some((lo, hi))));
     let mut attributes = json!({"POSITION": position});
     let base_normals = with_normals.then(|| vertex_normals(base, faces));
     if let Some(normals) = &base_normals {
         let normals = normals.clone();
+        let src = source.clone();
         let view = l.view(vec3_len, Some(ARRAY_BUFFER), None, move |w| {
-            write_vec3s(w, normals.iter().copied())
+            write_vec3s(w, gather(|i| normals[i], normals.len(), src.as_deref()))
         });
         attributes["NORMAL"] = json!(l.accessor(vec3_accessor(view, 0, n, None)));
+    }
+    if let Some(split) = split {
+        let texcoords = split.texcoords.clone();
+        let view = l.view(n * 8, Some(ARRAY_BUFFER), None, move |w| {
+            let mut buf = Vec::with_capacity(texcoords.len() * 8);
+            for c in texcoords.as_flattened() {
+                buf.extend_from_slice(&c.to_le_bytes());
+            }
+            w.write_all(&buf)
+        });
+        attributes["TEXCOORD_0"] = json!(l.accessor(json!({
+            "bufferView": view,
+            "componentType": FLOAT,
+            "count": n,
+            "type": "VEC2",
+        })));
     }
     if t < 2 {
         return Ok((attributes, Vec::new()));
@@ -354,23 +393,28 @@ fn mesh_data<'a>(
     let all_len = vec3_len
         .checked_mul(t)
         .ok_or_else(|| too_large("frames × vertices", t.saturating_mul(n)))?;
+    let src = source.clone();
     let pos_view = l.view(all_len, Some(ARRAY_BUFFER), Some(12), move |w| {
         for frame in frames.iter() {
-            write_vec3s(w, deltas(frame, base))?;
+            let d = |i: usize| delta(frame[i], base[i]);
+            write_vec3s(w, gather(d, base.len(), src.as_deref()))?;
         }
         Ok(())
     });
     let nrm_view = base_normals.map(|base_normals| {
+        let src = source.clone();
         l.view(all_len, Some(ARRAY_BUFFER), Some(12), move |w| {
             for frame in frames.iter() {
                 let normals = vertex_normals(frame, faces);
-                write_vec3s(w, deltas(&normals, &base_normals))?;
+                let d = |i: usize| delta(normals[i], base_normals[i]);
+                write_vec3s(w, gather(d, normals.len(), src.as_deref()))?;
             }
             Ok(())
         })
     });
     let mut targets = Vec::with_capacity(t);
     for (k, frame) in frames.iter().enumerate() {
+        // The bounds of the written deltas: a split copies values, it adds none.
         let d: Vec<[f32; 3]> = deltas(frame, base).collect();
         let b = bounds(&d);
         let mut target = json!({
@@ -386,13 +430,19 @@ fn mesh_data<'a>(
 
 /// `frame − base` per vertex, rounded once from the `f64` difference.
 fn deltas<'b>(frame: &'b [[f32; 3]], base: &'b [[f32; 3]]) -> impl Iterator<Item = [f32; 3]> + 'b {
-    frame
-        .iter()
-        .zip(base)
-        .map(|(p, b)| [0, 1, 2].map(|k| (f64::from(p[k]) - f64::from(b[k])) as f32))
+    frame.iter().zip(base).map(|(&p, &b)| delta(p, b))
 }
 
-fn index_accessor<'a>(l: &mut Layout<'a>, faces: &'a [[u32; 3]]) -> Result<usize, ExportError> {
+/// `p − b`, rounded once from the `f64` difference.
+fn delta(p: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [0, 1, 2].map(|k| (f64::from(p[k]) - f64::from(b[k])) as f32)
+}
+
+fn index_accessor<'a>(
+    l: &mut Layout<'a>,
+    faces: Cow<'a, [[u32; 3]]>,
+) -> Result<usize, ExportError> {
+    let count = faces.len() * 3;
     let len = faces
         .len()
         .checked_mul(12)
@@ -411,7 +461,7 @@ fn index_accessor<'a>(l: &mut Layout<'a>, faces: &'a [[u32; 3]]) -> Result<usize
     Ok(l.accessor(json!({
         "bufferView": view,
         "componentType": UNSIGNED_INT,
-        "count": faces.len() * 3,
+        "count": count,
         "type": "SCALAR",
     })))
 }
@@ -571,6 +621,8 @@ pub struct GlbMeshFrames {
     pub faces: Vec<[u32; 3]>,
     /// Positions at each key time (one frame for a static mesh).
     pub frames: Frames,
+    /// `TEXCOORD_0` per vertex, as stored (V down), when the primitive has it.
+    pub texcoords: Option<Vec<[f32; 2]>>,
 }
 
 /// A `.glb` scene read back by [`read_glb`].
@@ -706,10 +758,21 @@ pub fn parse_glb(bytes: &[u8], path: &Path) -> Result<GlbScene, ExportError> {
                 }
             }
         }
+        let texcoords = match prim["attributes"].get("TEXCOORD_0") {
+            Some(id) => {
+                let uv = r.floats(id, 2)?;
+                if uv.len() != 2 * n {
+                    return Err(bad("TEXCOORD_0's count differs from POSITION's".into()));
+                }
+                Some(uv.chunks_exact(2).map(|c| [c[0], c[1]]).collect())
+            }
+            None => None,
+        };
         meshes.push(GlbMeshFrames {
             name: node["name"].as_str().unwrap_or("").to_owned(),
             faces,
             frames,
+            texcoords,
         });
     }
     Ok(GlbScene { meshes, times })
@@ -837,6 +900,7 @@ impl Reader<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::export::{BODY_COLOR, GARMENT_COLOR};
     use crate::primitives::{cylinder, grid};
 
     fn frames_of(mesh: &crate::TriMesh, t: usize) -> Frames {
@@ -869,16 +933,18 @@ mod tests {
         let gf = frames_of(&g, 5);
         let bf = frames_of(&b, 1);
         let meshes = [
-            GlbMesh {
+            AnimatedMesh {
                 name: "garment",
                 faces: &g.faces,
                 frames: &gf,
+                uvs: None,
                 color: GARMENT_COLOR,
             },
-            GlbMesh {
+            AnimatedMesh {
                 name: "body",
                 faces: &b.faces,
                 frames: &bf,
+                uvs: None,
                 color: BODY_COLOR,
             },
         ];
@@ -897,14 +963,68 @@ mod tests {
     }
 
     #[test]
+    fn uv_seams_split_vertices_and_keep_every_corner() {
+        // A grid with a seam down its middle column: the faces right of it use UVs
+        // shifted by 10, so the seam vertices carry two UVs each.
+        let g = grid(3, 3, 1.0);
+        let frames = frames_of(&g, 3);
+        let uvs: Vec<[[f32; 2]; 3]> = g
+            .faces
+            .iter()
+            .map(|f| {
+                let right = f.iter().any(|&i| g.positions[i as usize][0] > 1.5);
+                f.map(|i| {
+                    let p = g.positions[i as usize];
+                    [p[0] as f32 + if right { 10.0 } else { 0.0 }, p[2] as f32]
+                })
+            })
+            .collect();
+        let bytes = glb_bytes(
+            &[AnimatedMesh {
+                name: "garment",
+                faces: &g.faces,
+                uvs: Some(&uvs),
+                frames: &frames,
+                color: GARMENT_COLOR,
+            }],
+            GlbOptions::default(),
+        )
+        .unwrap();
+        let scene = parse_glb(&bytes, Path::new("t.glb")).unwrap();
+        let m = &scene.meshes[0];
+        let texcoords = m.texcoords.as_ref().unwrap();
+        let distinct: std::collections::HashSet<(u32, [u32; 2])> = g
+            .faces
+            .iter()
+            .zip(&uvs)
+            .flat_map(|(f, t)| (0..3).map(move |k| (f[k], t[k].map(f32::to_bits))))
+            .collect();
+        assert!(m.frames.vertex_count() > g.vertex_count());
+        assert_eq!(m.frames.vertex_count(), distinct.len());
+        assert_eq!(m.faces.len(), g.faces.len());
+        for (fi, (f, written)) in g.faces.iter().zip(&m.faces).enumerate() {
+            for k in 0..3 {
+                let (src, dst) = (f[k] as usize, written[k] as usize);
+                assert_eq!(texcoords[dst], [uvs[fi][k][0], 1.0 - uvs[fi][k][1]]);
+                for t in 0..3 {
+                    let a = frames.frame(t).unwrap()[src];
+                    let b = m.frames.frame(t).unwrap()[dst];
+                    assert!((0..3).all(|c| (a[c] - b[c]).abs() < 1e-6), "{a:?} {b:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn json_has_what_the_spec_requires() {
         let g = grid(3, 2, 1.0);
         let f = frames_of(&g, 3);
         let bytes = glb_bytes(
-            &[GlbMesh {
+            &[AnimatedMesh {
                 name: "g",
                 faces: &g.faces,
                 frames: &f,
+                uvs: None,
                 color: GARMENT_COLOR,
             }],
             GlbOptions::default(),
@@ -931,16 +1051,17 @@ mod tests {
         let g = grid(2, 2, 1.0);
         let f3 = frames_of(&g, 3);
         let f2 = frames_of(&g, 2);
-        let m = |f| GlbMesh {
+        let m = |f| AnimatedMesh {
             name: "a",
             faces: &g.faces,
             frames: f,
+            uvs: None,
             color: BODY_COLOR,
         };
         let e = glb_bytes(
             &[
                 m(&f3),
-                GlbMesh {
+                AnimatedMesh {
                     name: "b",
                     ..m(&f2)
                 },
@@ -964,7 +1085,7 @@ mod tests {
         assert!(matches!(e, ExportError::Fps { .. }));
         let bad_faces = [[0, 1, 9]];
         let e = glb_bytes(
-            &[GlbMesh {
+            &[AnimatedMesh {
                 faces: &bad_faces,
                 ..m(&f3)
             }],
@@ -987,10 +1108,11 @@ mod tests {
         let g = grid(2, 2, 1.0);
         let f = frames_of(&g, 2);
         let good = glb_bytes(
-            &[GlbMesh {
+            &[AnimatedMesh {
                 name: "g",
                 faces: &g.faces,
                 frames: &f,
+                uvs: None,
                 color: BODY_COLOR,
             }],
             GlbOptions::default(),
@@ -1031,10 +1153,11 @@ mod tests {
         let g = grid(2, 2, 1.0);
         let f = frames_of(&g, 2);
         let good = glb_bytes(
-            &[GlbMesh {
+            &[AnimatedMesh {
                 name: "g",
                 faces: &g.faces,
                 frames: &f,
+                uvs: None,
                 color: BODY_COLOR,
             }],
             GlbOptions::default(),

@@ -7,6 +7,7 @@
 //! | PC2 | [`pc2`] | point cache for Blender's Mesh Cache modifier, 3ds Max, Unreal |
 //! | MDD | [`mdd`] | point cache for Blender, Maya, Cinema 4D, Houdini |
 //! | glTF 2.0 binary | [`gltf`] | morph-target animation for engines and the web |
+//! | USD | [`usd`] | time-sampled points for Maya, Houdini, Unreal, Omniverse |
 //!
 //! The animation itself is a [`Frames`] sequence, read from a `.npy` array
 //! ([`npy`], shape `(frames, vertices, 3)`) or a directory of OBJ frames; the faces come
@@ -21,6 +22,8 @@ pub mod mdd;
 pub mod npy;
 pub mod obj_sequence;
 pub mod pc2;
+pub mod scene;
+pub mod usd;
 
 use std::fmt;
 use std::io::{self, Write};
@@ -29,10 +32,12 @@ use std::str::FromStr;
 
 pub use error::ExportError;
 pub use frames::Frames;
-pub use gltf::{write_glb, GlbMesh, GlbOptions};
+pub use gltf::{write_glb, GlbOptions};
 pub use mdd::write_mdd;
 pub use obj_sequence::{remove_obj_sequence, write_obj_sequence};
 pub use pc2::{write_pc2, Pc2Timing};
+pub use scene::{AnimatedMesh, CornerUvs, BODY_COLOR, GARMENT_COLOR};
+pub use usd::write_usd;
 
 use crate::mesh::TriMesh;
 
@@ -47,30 +52,40 @@ pub enum ExportFormat {
     Mdd,
     /// A glTF 2.0 binary with morph-target animation.
     Glb,
+    /// A USD text layer with time-sampled points.
+    Usd,
 }
 
 impl ExportFormat {
     /// Every format, in the order the CLI lists them.
-    pub const ALL: [ExportFormat; 4] = [
+    pub const ALL: [ExportFormat; 5] = [
         ExportFormat::ObjSequence,
         ExportFormat::Pc2,
         ExportFormat::Mdd,
         ExportFormat::Glb,
+        ExportFormat::Usd,
     ];
 
-    /// The short name used on the command line: `obj`, `pc2`, `mdd`, `glb`.
+    /// The short name used on the command line: `obj`, `pc2`, `mdd`, `glb`, `usd`.
     pub fn name(self) -> &'static str {
         match self {
             ExportFormat::ObjSequence => "obj",
             ExportFormat::Pc2 => "pc2",
             ExportFormat::Mdd => "mdd",
             ExportFormat::Glb => "glb",
+            ExportFormat::Usd => "usd",
         }
     }
 
     /// Whether the output is a directory (OBJ sequence) rather than one file.
     pub fn writes_directory(self) -> bool {
         self == ExportFormat::ObjSequence
+    }
+
+    /// Whether the format holds a scene of several meshes (the body beside the garment)
+    /// rather than one point cache.
+    pub fn holds_scene(self) -> bool {
+        matches!(self, ExportFormat::Glb | ExportFormat::Usd)
     }
 }
 
@@ -81,6 +96,7 @@ impl fmt::Display for ExportFormat {
             ExportFormat::Pc2 => "PC2",
             ExportFormat::Mdd => "MDD",
             ExportFormat::Glb => "glTF binary",
+            ExportFormat::Usd => "USD",
         })
     }
 }
@@ -88,13 +104,15 @@ impl fmt::Display for ExportFormat {
 impl FromStr for ExportFormat {
     type Err = ExportError;
 
-    /// `obj`, `pc2`, `mdd` or `glb` (any case; `gltf` is taken for `glb`).
+    /// `obj`, `pc2`, `mdd`, `glb` or `usd` (any case; `gltf` is taken for `glb`, `usda`
+    /// for `usd`).
     fn from_str(s: &str) -> Result<Self, ExportError> {
         match s.to_ascii_lowercase().as_str() {
             "obj" => Ok(ExportFormat::ObjSequence),
             "pc2" => Ok(ExportFormat::Pc2),
             "mdd" => Ok(ExportFormat::Mdd),
             "glb" | "gltf" => Ok(ExportFormat::Glb),
+            "usd" | "usda" => Ok(ExportFormat::Usd),
             _ => Err(ExportError::UnknownFormat { name: s.to_owned() }),
         }
     }
@@ -102,13 +120,16 @@ impl FromStr for ExportFormat {
 
 /// Writes `frames` of `template` (whose faces are used; its positions are not) in
 /// `format` to `out`, a directory for OBJ sequences and a file otherwise, at `fps`
-/// frames per second (PC2 stores no rate: sample `k` is frame `k`).
+/// frames per second (PC2 stores no rate: sample `k` is frame `k`). `uvs`, the
+/// template's corner UVs, go into the formats that hold texture coordinates (OBJ, glTF,
+/// USD); the point caches apply to the template itself, which keeps its own.
 ///
 /// Checks first and writes nothing on failure: the vertex counts must agree, every
 /// coordinate must be finite, `fps` positive and finite.
 pub fn export(
     format: ExportFormat,
     template: &TriMesh,
+    uvs: Option<&CornerUvs>,
     frames: &Frames,
     fps: f32,
     out: &Path,
@@ -116,20 +137,31 @@ pub fn export(
     check_template(template, frames)?;
     validate_fps(fps)?;
     frames.check_finite()?;
+    let garment = AnimatedMesh {
+        name: "garment",
+        faces: &template.faces,
+        uvs,
+        frames,
+        color: GARMENT_COLOR,
+    };
+    write_scene(format, &[garment], fps, out)
+}
+
+/// Writes a scene: for OBJ sequences and point caches only its first mesh (they hold
+/// one), for glTF and USD every mesh.
+pub fn write_scene(
+    format: ExportFormat,
+    meshes: &[AnimatedMesh<'_>],
+    fps: f32,
+    out: &Path,
+) -> Result<(), ExportError> {
+    let first = meshes.first().ok_or(ExportError::NoFrames)?;
     match format {
-        ExportFormat::ObjSequence => write_obj_sequence(out, &template.faces, frames),
-        ExportFormat::Pc2 => write_pc2(out, frames, Pc2Timing::default()),
-        ExportFormat::Mdd => write_mdd(out, frames, fps),
-        ExportFormat::Glb => write_glb(
-            out,
-            &[GlbMesh {
-                name: "garment",
-                faces: &template.faces,
-                frames,
-                color: gltf::GARMENT_COLOR,
-            }],
-            GlbOptions { fps, normals: true },
-        ),
+        ExportFormat::ObjSequence => write_obj_sequence(out, first.faces, first.uvs, first.frames),
+        ExportFormat::Pc2 => write_pc2(out, first.frames, Pc2Timing::default()),
+        ExportFormat::Mdd => write_mdd(out, first.frames, fps),
+        ExportFormat::Glb => write_glb(out, meshes, GlbOptions { fps, normals: true }),
+        ExportFormat::Usd => write_usd(out, meshes, fps),
     }
 }
 
@@ -250,8 +282,9 @@ mod tests {
         assert_eq!("GLTF".parse::<ExportFormat>().unwrap(), ExportFormat::Glb);
         assert_eq!(
             "fbx".parse::<ExportFormat>().unwrap_err().to_string(),
-            "unknown export format `fbx`; expected one of obj, pc2, mdd, glb"
+            "unknown export format `fbx`; expected one of obj, pc2, mdd, glb, usd"
         );
+        assert_eq!("usda".parse::<ExportFormat>().unwrap(), ExportFormat::Usd);
     }
 
     #[test]
@@ -259,20 +292,31 @@ mod tests {
         let dir = TestDir::new("export");
         let g = grid(2, 3, 1.0);
         let f = Frames::from_frames(&[vec![[0.0; 3]; 5]]).unwrap();
-        let e = export(ExportFormat::Pc2, &g, &f, 30.0, &dir.0.join("a.pc2")).unwrap_err();
+        let e = export(ExportFormat::Pc2, &g, None, &f, 30.0, &dir.0.join("a.pc2")).unwrap_err();
         assert_eq!(
             e.to_string(),
             "the frames have 5 vertices but the template has 6; expected one position per template vertex, in the template's order"
         );
         let f = Frames::from_frames(&[vec![[0.0; 3]; 6]]).unwrap();
-        let e = export(ExportFormat::Mdd, &g, &f, f32::NAN, &dir.0.join("a.mdd")).unwrap_err();
+        let e = export(
+            ExportFormat::Mdd,
+            &g,
+            None,
+            &f,
+            f32::NAN,
+            &dir.0.join("a.mdd"),
+        )
+        .unwrap_err();
         assert!(matches!(e, ExportError::Fps { .. }));
         assert!(dir.entries().is_empty());
         for format in ExportFormat::ALL {
             let out = dir.0.join(format!("x.{}", format.name()));
-            export(format, &g, &f, 30.0, &out).unwrap();
+            export(format, &g, None, &f, 30.0, &out).unwrap();
         }
-        assert_eq!(dir.entries(), vec!["x.glb", "x.mdd", "x.obj", "x.pc2"]);
+        assert_eq!(
+            dir.entries(),
+            vec!["x.glb", "x.mdd", "x.obj", "x.pc2", "x.usd"]
+        );
     }
 
     #[test]

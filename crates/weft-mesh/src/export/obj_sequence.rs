@@ -1,5 +1,6 @@
 //! OBJ sequences: one Wavefront OBJ per frame, `frame_00000.obj`, `frame_00001.obj`, …,
-//! each with the template's faces and the vertices in the template's order.
+//! each with the template's faces and the vertices in the template's order, and the
+//! template's texture coordinates (`vt`, `f v/vt`) when it has them.
 //!
 //! The most portable animation there is: every tool reads OBJ, and per-vertex data
 //! (errors, attributions) stays aligned because vertex order is kept. Coordinates are
@@ -18,6 +19,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::error::ExportError;
+use super::scene::{check_uvs, CornerUvs, IndexedUvs};
 use super::Frames;
 
 /// Distinguishes temporary directories of concurrent exports from one process.
@@ -38,6 +40,7 @@ pub fn frame_file_name(k: usize) -> String {
 pub fn write_obj_sequence(
     dir: &Path,
     faces: &[[u32; 3]],
+    uvs: Option<&CornerUvs>,
     frames: &Frames,
 ) -> Result<(), ExportError> {
     if frames.is_empty() {
@@ -45,6 +48,9 @@ pub fn write_obj_sequence(
     }
     frames.check_finite()?;
     check_faces(faces, frames.vertex_count())?;
+    if let Some(uvs) = uvs {
+        check_uvs(faces, uvs)?;
+    }
     let existing = inspect_destination(dir)?;
 
     let parent = parent_of(dir);
@@ -64,8 +70,8 @@ pub fn write_obj_sequence(
     fs::create_dir_all(&parent).map_err(|e| ExportError::write(dir, e))?;
     let temp = TempDir::create(&parent, &name).map_err(|e| ExportError::write(dir, e))?;
 
-    let faces_text = faces_text(faces);
-    write_frames_parallel(&temp.0, frames, &faces_text).map_err(|e| ExportError::write(dir, e))?;
+    let trailer = Trailer::new(faces, uvs);
+    write_frames_parallel(&temp.0, frames, &trailer).map_err(|e| ExportError::write(dir, e))?;
     sync_dir(&temp.0);
     temp.commit(dir, existing)
         .map_err(|e| ExportError::write(dir, e))?;
@@ -96,7 +102,7 @@ const WRITER_THREADS: usize = 16;
 
 /// Writes every frame file into `dir` from up to [`WRITER_THREADS`] threads, each taking
 /// the next unwritten frame. The first error stops the others and is returned.
-fn write_frames_parallel(dir: &Path, frames: &Frames, faces_text: &[u8]) -> io::Result<()> {
+fn write_frames_parallel(dir: &Path, frames: &Frames, trailer: &Trailer) -> io::Result<()> {
     use std::sync::atomic::{AtomicBool, AtomicUsize};
     use std::sync::Mutex;
 
@@ -116,7 +122,7 @@ fn write_frames_parallel(dir: &Path, frames: &Frames, faces_text: &[u8]) -> io::
                     let path = dir.join(frame_file_name(k));
                     let written = File::create(&path).and_then(|file| {
                         let mut w = BufWriter::with_capacity(1 << 16, file);
-                        write_frame_to(&mut w, positions, faces_text, k, total, &mut line)?;
+                        write_frame_to(&mut w, positions, trailer, k, total, &mut line)?;
                         let file = w.into_inner().map_err(io::IntoInnerError::into_error)?;
                         file.sync_all()
                     });
@@ -142,12 +148,12 @@ pub fn read_obj_sequence(dir: &Path) -> Result<Frames, ExportError> {
     Frames::read_obj_dir(dir)
 }
 
-/// Writes one frame: a comment, `v x y z` per vertex, then the prepared face lines.
-/// `line` is a scratch buffer reused across frames.
+/// Writes one frame: a comment, `v x y z` per vertex, then the prepared `vt` and face
+/// lines. `line` is a scratch buffer reused across frames.
 fn write_frame_to(
     w: &mut dyn Write,
     positions: &[[f32; 3]],
-    faces_text: &[u8],
+    trailer: &Trailer,
     k: usize,
     total: usize,
     line: &mut String,
@@ -158,7 +164,7 @@ fn write_frame_to(
         line,
         "# weft frame {k} of {total}: {} vertices, {} triangles",
         positions.len(),
-        faces_text.iter().filter(|&&b| b == b'\n').count()
+        trailer.triangles
     );
     for p in positions {
         line.push('v');
@@ -169,24 +175,46 @@ fn write_frame_to(
         line.push('\n');
     }
     w.write_all(line.as_bytes())?;
-    w.write_all(faces_text)?;
+    w.write_all(&trailer.text)?;
     w.flush()
 }
 
-/// `f a b c` lines (1-based) for every face, built once for all frames.
-fn faces_text(faces: &[[u32; 3]]) -> Vec<u8> {
-    use std::fmt::Write as _;
-    let mut s = String::with_capacity(faces.len() * 20);
-    for f in faces {
-        let _ = writeln!(
-            s,
-            "f {} {} {}",
-            u64::from(f[0]) + 1,
-            u64::from(f[1]) + 1,
-            u64::from(f[2]) + 1
-        );
+/// What follows the vertices in every frame file, built once for all frames: the
+/// distinct UVs as `vt u v` and the faces as `f a b c` or `f a/ta b/tb c/tc` (1-based).
+struct Trailer {
+    text: Vec<u8>,
+    triangles: usize,
+}
+
+impl Trailer {
+    fn new(faces: &[[u32; 3]], uvs: Option<&CornerUvs>) -> Self {
+        use std::fmt::Write as _;
+        let mut s = String::with_capacity(faces.len() * 40);
+        let indexed = uvs.map(IndexedUvs::new);
+        if let Some(indexed) = &indexed {
+            for uv in &indexed.values {
+                s.push_str("vt ");
+                fmt_f32(&mut s, uv[0]);
+                s.push(' ');
+                fmt_f32(&mut s, uv[1]);
+                s.push('\n');
+            }
+        }
+        for (i, f) in faces.iter().enumerate() {
+            s.push('f');
+            for (k, &v) in f.iter().enumerate() {
+                let _ = write!(s, " {}", u64::from(v) + 1);
+                if let Some(indexed) = &indexed {
+                    let _ = write!(s, "/{}", u64::from(indexed.corners[i][k]) + 1);
+                }
+            }
+            s.push('\n');
+        }
+        Trailer {
+            text: s.into_bytes(),
+            triangles: faces.len(),
+        }
     }
-    s.into_bytes()
 }
 
 /// The shortest decimal that parses back to the same `f32`; exponent form only for very
@@ -373,7 +401,7 @@ mod tests {
         let dir = TestDir::new("objseq");
         let out = dir.0.join("seq");
         let f = frames();
-        write_obj_sequence(&out, &FACES, &f).unwrap();
+        write_obj_sequence(&out, &FACES, None, &f).unwrap();
         assert_eq!(read_obj_sequence(&out).unwrap(), f);
         let m = crate::io::read_obj(&out.join("frame_00001.obj")).unwrap();
         assert_eq!(m.faces, FACES.to_vec());
@@ -382,9 +410,34 @@ mod tests {
 
         // A previous sequence is replaced, fewer frames leave no stale files.
         let one = Frames::from_frames(&[f.frame(1).unwrap().to_vec()]).unwrap();
-        write_obj_sequence(&out, &FACES, &one).unwrap();
+        write_obj_sequence(&out, &FACES, None, &one).unwrap();
         assert_eq!(read_obj_sequence(&out).unwrap(), one);
         assert_eq!(dir.entries(), vec!["seq"]);
+    }
+
+    #[test]
+    fn template_uvs_are_written_with_every_frame() {
+        let dir = TestDir::new("objseq-uv");
+        let out = dir.0.join("seq");
+        // A seam: vertex 0 and 2 have another UV in the second triangle.
+        let uvs = [
+            [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
+            [[0.5, 0.0], [0.25, 1.0], [0.0, 1.0]],
+        ];
+        write_obj_sequence(&out, &FACES, Some(&uvs), &frames()).unwrap();
+        assert_eq!(read_obj_sequence(&out).unwrap(), frames());
+        for k in 0..2 {
+            let r = crate::io::load_obj(&out.join(frame_file_name(k))).unwrap();
+            assert_eq!(r.mesh.faces, FACES.to_vec());
+            assert_eq!(r.corner_uvs.unwrap(), uvs.to_vec());
+        }
+        let text = fs::read_to_string(out.join("frame_00000.obj")).unwrap();
+        assert!(
+            text.contains("vt 0.25 1\nvt 0 1\nf 1/1 2/2 3/3\nf 1/4 3/5 4/6\n"),
+            "{text}"
+        );
+        let e = write_obj_sequence(&out, &FACES, Some(&uvs[..1]), &frames()).unwrap_err();
+        assert!(matches!(e, ExportError::UvCount { uvs: 1, faces: 2 }));
     }
 
     /// Issue 17 item 12: missing parents are created; a stale sequence is removed only
@@ -393,7 +446,7 @@ mod tests {
     fn parents_are_created_and_stale_sequences_removed() {
         let dir = TestDir::new("objseq-parents");
         let out = dir.0.join("a/b/seq");
-        write_obj_sequence(&out, &FACES, &frames()).unwrap();
+        write_obj_sequence(&out, &FACES, None, &frames()).unwrap();
         assert_eq!(read_obj_sequence(&out).unwrap(), frames());
         assert!(remove_obj_sequence(&out).unwrap());
         assert!(!out.exists());
@@ -410,7 +463,7 @@ mod tests {
         let out = dir.0.join("seq");
         fs::create_dir(&out).unwrap();
         fs::write(out.join("notes.txt"), "mine").unwrap();
-        let e = write_obj_sequence(&out, &FACES, &frames())
+        let e = write_obj_sequence(&out, &FACES, None, &frames())
             .unwrap_err()
             .to_string();
         assert!(e.contains("holds `notes.txt`"), "{e}");
@@ -418,12 +471,12 @@ mod tests {
 
         let file = dir.0.join("file");
         fs::write(&file, "x").unwrap();
-        let e = write_obj_sequence(&file, &FACES, &frames())
+        let e = write_obj_sequence(&file, &FACES, None, &frames())
             .unwrap_err()
             .to_string();
         assert!(e.contains("is not a directory"), "{e}");
 
-        let e = write_obj_sequence(&dir.0.join("new"), &[[0, 1, 4]], &frames()).unwrap_err();
+        let e = write_obj_sequence(&dir.0.join("new"), &[[0, 1, 4]], None, &frames()).unwrap_err();
         assert_eq!(
             e.to_string(),
             "face 0 names vertex 4, but the frames have 4 vertices"
@@ -431,14 +484,14 @@ mod tests {
 
         let mut nan = frames();
         nan.positions_mut_for_test()[5][1] = f32::NAN;
-        let e = write_obj_sequence(&dir.0.join("new"), &FACES, &nan).unwrap_err();
+        let e = write_obj_sequence(&dir.0.join("new"), &FACES, None, &nan).unwrap_err();
         assert!(
             e.to_string()
                 .starts_with("frame 1, vertex 1: the y coordinate is NaN"),
             "{e}"
         );
 
-        let e = write_obj_sequence(&dir.0.join("file/seq"), &FACES, &frames()).unwrap_err();
+        let e = write_obj_sequence(&dir.0.join("file/seq"), &FACES, None, &frames()).unwrap_err();
         assert!(matches!(e, ExportError::Write { .. }), "{e}");
         assert_eq!(dir.entries(), vec!["file", "seq"]);
     }
@@ -446,7 +499,7 @@ mod tests {
     #[test]
     fn an_empty_directory_is_filled() {
         let dir = TestDir::new("objseq-empty");
-        write_obj_sequence(&dir.0, &FACES, &frames()).unwrap();
+        write_obj_sequence(&dir.0, &FACES, None, &frames()).unwrap();
         assert_eq!(dir.entries(), vec!["frame_00000.obj", "frame_00001.obj"]);
     }
 }

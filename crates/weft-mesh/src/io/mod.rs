@@ -75,6 +75,10 @@ pub struct LoadReport {
     /// corner. Fans are right for convex polygons only; callers should report a nonzero
     /// count so a user can check concave ones.
     pub triangulated_polygons: usize,
+    /// Texture coordinates of each triangle's three corners, when the file gives every
+    /// face corner one (OBJ `f v/vt`); `None` otherwise and for PLY. A garment's UVs are
+    /// its pattern, so exports carry them.
+    pub corner_uvs: Option<Vec<[[f32; 2]; 3]>>,
 }
 
 /// Reads an OBJ or PLY mesh (by extension, any case) and says what loading did.

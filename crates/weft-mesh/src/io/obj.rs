@@ -1,5 +1,5 @@
-//! Wavefront OBJ: the polygon subset weft needs (`v` and `f`), read with line-accurate
-//! errors and written with round-trip precision.
+//! Wavefront OBJ: the polygon subset weft needs (`v`, `vt` and `f`), read with
+//! line-accurate errors and written with round-trip precision.
 //!
 //! Why not `tobj`: it renumbers vertices in order of first use per object, drops unused
 //! vertices, and duplicates a vertex for every object (`o`/`g`/`usemtl` split) and, with
@@ -22,10 +22,11 @@ use crate::validate::check;
 /// Parses an OBJ file held in memory; `path` only names the file in errors.
 ///
 /// Reads `v x y z` (further numbers — a `w` weight or `r g b` colour — are checked and
-/// ignored) and `f` with corners `v`, `v/vt`, `v/vt/vn` or `v//vn`, indices 1-based or
-/// negative (relative to the elements defined so far). Positive indices may point
-/// forward. Texture and normal indices are range-checked, their data is not used.
-/// Polygons are split into triangle fans and counted. `o`, `g`, `usemtl`, `s`, `l`, `p`,
+/// ignored), `vt u [v [w]]` and `f` with corners `v`, `v/vt`, `v/vt/vn` or `v//vn`,
+/// indices 1-based or negative (relative to the elements defined so far). Positive
+/// indices may point forward. Texture and normal indices are range-checked; the texture
+/// coordinates become [`LoadReport::corner_uvs`] when every face corner has one, normals
+/// are not used. Polygons are split into triangle fans and counted. `o`, `g`, `usemtl`, `s`, `l`, `p`,
 /// `mtllib` and unknown statements are ignored; `#` starts a comment anywhere.
 ///
 /// Fails on binary or non-UTF-8 data, malformed `v`/`f` lines, non-finite
@@ -53,7 +54,10 @@ pub fn load_obj_bytes(bytes: &[u8], path: &Path) -> Result<LoadReport, MeshError
     let mut faces: Vec<[u32; 3]> = Vec::new();
     let mut counts = Counts::default();
     let mut triangulated_polygons = 0usize;
-    let mut corners: Vec<u32> = Vec::new();
+    let mut corners: Vec<(u32, Option<usize>)> = Vec::new();
+    let mut uvs: Vec<[f32; 2]> = Vec::new();
+    // Texture-coordinate indices of each triangle's corners while every corner has one.
+    let mut corner_uv_indices: Option<Vec<[usize; 3]>> = Some(Vec::new());
 
     for (i, raw) in text.split('\n').enumerate() {
         let line = i + 1;
@@ -67,7 +71,10 @@ pub fn load_obj_bytes(bytes: &[u8], path: &Path) -> Result<LoadReport, MeshError
                 positions.push(parse_vertex(words).map_err(|m| err(line, m))?);
                 counts.v = positions.len();
             }
-            Some("vt") => counts.vt += 1,
+            Some("vt") => {
+                uvs.push(parse_uv(words).map_err(|m| err(line, m))?);
+                counts.vt = uvs.len();
+            }
             Some("vn") => counts.vn += 1,
             Some("f") => {
                 corners.clear();
@@ -85,7 +92,11 @@ pub fn load_obj_bytes(bytes: &[u8], path: &Path) -> Result<LoadReport, MeshError
                 }
                 let first = corners[0];
                 for pair in corners[1..].windows(2) {
-                    faces.push([first, pair[0], pair[1]]);
+                    faces.push([first.0, pair[0].0, pair[1].0]);
+                    corner_uv_indices = corner_uv_indices.and_then(|mut all| {
+                        all.push([first.1?, pair[0].1?, pair[1].1?]);
+                        Some(all)
+                    });
                 }
             }
             _ => {}
@@ -97,11 +108,40 @@ pub fn load_obj_bytes(bytes: &[u8], path: &Path) -> Result<LoadReport, MeshError
 
     let mesh = TriMesh::new(positions, faces);
     check(&mesh, path)?;
+    // Indices are range-checked above, forward ones included.
+    let corner_uvs = corner_uv_indices
+        .filter(|_| !uvs.is_empty())
+        .map(|all| all.iter().map(|t| t.map(|k| uvs[k])).collect());
     Ok(LoadReport {
         mesh,
         format: MeshFormat::Obj,
         triangulated_polygons,
+        corner_uvs,
     })
+}
+
+/// `u [v [w]]` after `vt`: `v` defaults to 0 and `w` is checked and ignored.
+fn parse_uv<'a>(words: impl Iterator<Item = &'a str>) -> Result<[f32; 2], String> {
+    let mut uv = [0.0f32; 2];
+    let mut n = 0;
+    for word in words {
+        let x = parse_number(word)?;
+        if n < 2 {
+            uv[n] = x as f32;
+            if !uv[n].is_finite() {
+                return Err(format!(
+                    "texture coordinate `{word}` is not a finite 32-bit float"
+                ));
+            }
+        } else if n > 2 {
+            return Err("`vt` with more than three numbers; expected `vt u [v [w]]`".to_owned());
+        }
+        n += 1;
+    }
+    if n == 0 {
+        return Err("`vt` without numbers; expected `vt u [v [w]]`".to_owned());
+    }
+    Ok(uv)
 }
 
 /// `x y z` and optional further numbers after `v`.
@@ -149,10 +189,12 @@ const KINDS: [(&str, &str); 3] = [
 ];
 
 impl Counts {
-    /// The 0-based position index of one face corner `v[/vt[/vn]]`; checks all three.
-    fn corner(&mut self, word: &str, line: usize) -> Result<u32, String> {
+    /// The 0-based position and texture-coordinate indices of one face corner
+    /// `v[/vt[/vn]]`; checks all three.
+    fn corner(&mut self, word: &str, line: usize) -> Result<(u32, Option<usize>), String> {
         let mut parts = word.split('/');
         let mut v = 0;
+        let mut vt = None;
         for kind in 0..3 {
             let Some(part) = parts.next() else { break };
             if part.is_empty() && kind > 0 {
@@ -163,6 +205,8 @@ impl Counts {
                 v = u32::try_from(index).map_err(|_| {
                     format!("vertex index `{part}` is larger than weft indexes (2^32)")
                 })?;
+            } else if kind == 1 {
+                vt = Some(index);
             }
         }
         if parts.next().is_some() {
@@ -170,7 +214,7 @@ impl Counts {
                 "face corner `{word}` has more than three parts; expected v, v/vt, v/vt/vn or v//vn"
             ));
         }
-        Ok(v)
+        Ok((v, vt))
     }
 
     /// A 0-based index from a 1-based or negative (relative) OBJ index.
@@ -320,6 +364,54 @@ pub(crate) mod tests {
         let m = load(text).unwrap().mesh;
         assert_eq!(m.positions.len(), 4);
         assert_eq!(m.faces, vec![[0, 1, 2], [0, 2, 3]]);
+    }
+
+    #[test]
+    fn corner_uvs_follow_the_triangle_fans() {
+        // A quad with its own UVs and a triangle reaching a forward `vt`.
+        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+                    f 1/1 2/2 3/3 4/4\nf 2/-3 3/5 4/4\nvt 0.25 0.5 0\n";
+        let r = load(text).unwrap();
+        assert_eq!(r.mesh.faces, vec![[0, 1, 2], [0, 2, 3], [1, 2, 3]]);
+        assert_eq!(
+            r.corner_uvs.unwrap(),
+            vec![
+                [[0., 0.], [1., 0.], [1., 1.]],
+                [[0., 0.], [1., 1.], [0., 1.]],
+                [[1., 0.], [0.25, 0.5], [0., 1.]]
+            ]
+        );
+        // One corner without a UV, or no `vt` at all: no UVs.
+        assert_eq!(
+            load("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3\n")
+                .unwrap()
+                .corner_uvs,
+            None
+        );
+        assert_eq!(load(&format!("{TRI}f 1 2 3\n")).unwrap().corner_uvs, None);
+        assert_eq!(
+            load("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5\nf 1/1 2/1 3/1\n")
+                .unwrap()
+                .corner_uvs
+                .unwrap()[0][0],
+            [0.5, 0.0]
+        );
+        assert_eq!(
+            err("vt\n"),
+            "t.obj:1: `vt` without numbers; expected `vt u [v [w]]`"
+        );
+        assert_eq!(
+            err("vt 0 x\n"),
+            "t.obj:1: `x` is not a number; expected a coordinate"
+        );
+        assert_eq!(
+            err("vt 0 1e40\n"),
+            "t.obj:1: texture coordinate `1e40` is not a finite 32-bit float"
+        );
+        assert_eq!(
+            err("vt 0 0 0 0\n"),
+            "t.obj:1: `vt` with more than three numbers; expected `vt u [v [w]]`"
+        );
     }
 
     #[test]

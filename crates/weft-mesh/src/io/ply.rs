@@ -822,6 +822,7 @@ pub fn load_ply_bytes(bytes: &[u8], path: &Path) -> Result<LoadReport, MeshError
         mesh,
         format: MeshFormat::Ply(header.encoding),
         triangulated_polygons,
+        corner_uvs: None,
     })
 }
 
