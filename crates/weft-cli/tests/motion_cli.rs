@@ -433,3 +433,102 @@ fn fps_with_a_motion_file_resamples_and_says_so() {
         serde_json::from_str(&std::fs::read_to_string(out.join("stats.json")).unwrap()).unwrap();
     assert_eq!(stats["fps"].as_f64(), Some(30.0));
 }
+
+/// `weft motion info --json` of `file`: (frames, fps, per-joint largest angle in degrees,
+/// root displacement).
+fn info_json(file: &Path) -> serde_json::Value {
+    let o = weft(&["motion", "info", s(file), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    serde_json::from_str(&stdout(&o)).unwrap()
+}
+
+/// Issue 18 item 3: `weft motion convert` between AMASS-style .npz and BVH, either up
+/// axis, any frame rate; a round trip keeps the motion.
+#[test]
+fn convert_between_npz_and_bvh_keeps_the_motion() {
+    let dir = scratch("convert");
+    let npz = dir.join("walk.npz");
+    generate_walk(&npz, &["--frames", "40", "--fps", "30"]);
+    let bvh = dir.join("walk.bvh");
+    let back = dir.join("back.npz");
+    let o = weft(&["motion", "convert", s(&npz), s(&bvh)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).starts_with(&format!(
+            "wrote {} (bvh, SMPL skeleton, Y up): 40 frames at 30 fps",
+            bvh.display()
+        )),
+        "{}",
+        stdout(&o)
+    );
+    let o = weft(&[
+        "motion",
+        "convert",
+        s(&bvh),
+        s(&back),
+        "--npz-up",
+        "y",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(
+        (v["format"].as_str(), v["npz_up"].as_str()),
+        (Some("npz"), Some("Y"))
+    );
+
+    let (a, b) = (info_json(&npz), info_json(&back));
+    assert_eq!(
+        (b["frames"].as_u64(), b["fps"].as_f64()),
+        (Some(40), Some(30.0))
+    );
+    assert_eq!(b["source"]["up"], "Y");
+    for (ja, jb) in a["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(b["joints"].as_array().unwrap())
+    {
+        let (x, y) = (
+            ja["max_angle_deg"].as_f64().unwrap(),
+            jb["max_angle_deg"].as_f64().unwrap(),
+        );
+        assert!((x - y).abs() < 0.05, "{}: {x} vs {y}", ja["name"]);
+    }
+    for k in 0..3 {
+        let (x, y) = (
+            a["root_displacement_m"][k].as_f64().unwrap(),
+            b["root_displacement_m"][k].as_f64().unwrap(),
+        );
+        assert!((x - y).abs() < 1e-4, "root displacement {k}: {x} vs {y}");
+    }
+
+    // Resampled on the way: 40 frames at 30 fps are 20 at 15.
+    let slow = dir.join("slow.bvh");
+    let o = weft(&["motion", "convert", s(&npz), s(&slow), "--fps", "15"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("resampled from 30 fps (40 frames) to 15 fps (20 frames)"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(info_json(&slow)["frames"].as_u64(), Some(20));
+
+    // Bad input: one line naming the problem, nothing written.
+    let o = weft(&["motion", "convert", s(&npz), s(&dir.join("walk.fbx"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).starts_with("error: OUT: ") && stderr(&o).trim_end().lines().count() == 1,
+        "{}",
+        stderr(&o)
+    );
+    let o = weft(&[
+        "motion",
+        "convert",
+        s(&dir.join("missing.npz")),
+        s(&dir.join("x.bvh")),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("missing.npz"), "{}", stderr(&o));
+    assert!(!dir.join("walk.fbx").exists() && !dir.join("x.bvh").exists());
+}

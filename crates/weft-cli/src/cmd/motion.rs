@@ -1,19 +1,20 @@
-//! `weft motion generate` and `weft motion info`.
+//! `weft motion generate`, `weft motion info` and `weft motion convert`.
 
 use anyhow::{bail, Context, Result};
-use clap::{Args, Subcommand, ValueEnum};
+use clap::{Args, Subcommand};
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use weft_body::joints::SMPL_JOINT_COUNT;
 use weft_motion::{
-    body_rest_joints, generate, load_motion, motion_stats, write_motion, BvhUnits, MapChoice,
-    MotionFileOptions, MotionFormat, MotionKind, MotionSource, NameMap, ProceduralParams,
-    SkeletonPreset, UpAxis,
+    body_rest_joints, generate, load_motion, motion_stats, write_motion, BvhUnits, LoadedMotion,
+    MapChoice, MotionFileOptions, MotionFormat, MotionKind, MotionSource, NameMap,
+    ProceduralParams, SkeletonPreset, UpAxis,
 };
 
 use super::body_args::BodyArgs;
 use super::emit;
+use super::motion_args::Up;
 
 #[derive(Subcommand)]
 pub enum MotionCommand {
@@ -23,22 +24,10 @@ pub enum MotionCommand {
     /// Frames, frame rate, duration, range of motion per joint and root path of an .npz
     /// or .bvh motion (BVH files are retargeted to SMPL's 24 joints first).
     Info(InfoArgs),
-}
-
-/// An up axis on the command line.
-#[derive(Clone, Copy, ValueEnum)]
-enum Up {
-    Y,
-    Z,
-}
-
-impl From<Up> for UpAxis {
-    fn from(u: Up) -> Self {
-        match u {
-            Up::Y => UpAxis::Y,
-            Up::Z => UpAxis::Z,
-        }
-    }
+    /// Convert a motion between BVH and AMASS-style .npz (either way, or .npz to .npz to
+    /// change the up axis, .bvh to .bvh to put it on the SMPL skeleton), optionally
+    /// resampled with --fps. Goes through SMPL's 24 joints, as every command reads motions.
+    Convert(ConvertArgs),
 }
 
 #[derive(Args)]
@@ -86,6 +75,33 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    read: ReadArgs,
+}
+
+#[derive(Args)]
+pub struct ConvertArgs {
+    /// The motion to read: .npz (AMASS layout) or .bvh.
+    #[arg(value_name = "IN")]
+    input: PathBuf,
+    /// The file to write: .npz (AMASS layout) or .bvh (SMPL skeleton, metres, Y up).
+    /// Written atomically.
+    #[arg(value_name = "OUT")]
+    output: PathBuf,
+    /// Up axis of an .npz output: z as AMASS stores it, or y as weft works.
+    #[arg(long, value_enum, default_value_t = Up::Z)]
+    npz_up: Up,
+    /// Print one JSON object describing what was written.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    read: ReadArgs,
+}
+
+/// How a motion file is read: its up axis, BVH name map and unit, the frame rate to
+/// resample to, and the body whose rest joints it is read against.
+#[derive(Args)]
+struct ReadArgs {
     /// The file's up axis (default: z for .npz as in AMASS, y for .bvh).
     #[arg(long, value_enum)]
     up: Option<Up>,
@@ -105,10 +121,59 @@ pub struct InfoArgs {
     body: BodyArgs,
 }
 
+impl ReadArgs {
+    /// The options for `file` (its format picks which of --up applies).
+    fn options(&self, file: &std::path::Path) -> Result<MotionFileOptions> {
+        let format = MotionFormat::from_path(file)?;
+        let mut options = MotionFileOptions {
+            rest_joints: rest_joints(&self.body)?,
+            ..MotionFileOptions::default()
+        };
+        if let Some(up) = self.up {
+            match format {
+                MotionFormat::Npz => options.npz_up = Some(up.into()),
+                MotionFormat::Bvh => options.bvh_up = up.into(),
+            }
+        }
+        if let Some(map) = &self.map {
+            options.bvh_map = match SkeletonPreset::parse(map) {
+                Some(p) => MapChoice::Preset(p),
+                None => {
+                    // A name that is no file and has no name-map extension is a mistyped
+                    // preset, not a missing file.
+                    let path = std::path::Path::new(map);
+                    if !path.exists() && !super::has_extension(path, &["toml", "json"]) {
+                        let presets: Vec<&str> =
+                            SkeletonPreset::ALL.iter().map(|p| p.name()).collect();
+                        bail!(
+                            "--map {map}: neither a preset ({}) nor a .toml or .json name-map file",
+                            presets.join(", ")
+                        );
+                    }
+                    MapChoice::Custom(NameMap::read(path).context("--map")?)
+                }
+            };
+        }
+        if let Some(scale) = self.scale {
+            options.bvh_units = BvhUnits::MetresPerUnit(scale);
+        }
+        Ok(options)
+    }
+
+    /// Reads `file`, reporting notes and a resampling on stderr.
+    fn load(&self, file: &std::path::Path) -> Result<(LoadedMotion, MotionFileOptions)> {
+        let options = self.options(file)?;
+        let read = load_motion(file, &options, self.fps)?;
+        super::motion_args::report(file, &read);
+        Ok((read, options))
+    }
+}
+
 pub fn run(command: MotionCommand) -> Result<()> {
     match command {
         MotionCommand::Generate(a) => generate_cmd(&a),
         MotionCommand::Info(a) => info(&a),
+        MotionCommand::Convert(a) => convert(&a),
     }
 }
 
@@ -159,42 +224,47 @@ fn generate_cmd(args: &GenerateArgs) -> Result<()> {
     ))
 }
 
-fn info(args: &InfoArgs) -> Result<()> {
-    let format = MotionFormat::from_path(&args.file)?;
-    let mut options = MotionFileOptions {
-        rest_joints: rest_joints(&args.body)?,
-        ..MotionFileOptions::default()
+fn convert(args: &ConvertArgs) -> Result<()> {
+    // Fail on the output's extension before reading anything.
+    let out_format = MotionFormat::from_path(&args.output).context("OUT")?;
+    let (read, read_options) = args.read.load(&args.input)?;
+    let motion = read.motion;
+    let options = MotionFileOptions {
+        npz_up: Some(args.npz_up.into()),
+        ..read_options
     };
-    if let Some(up) = args.up {
-        match format {
-            MotionFormat::Npz => options.npz_up = Some(up.into()),
-            MotionFormat::Bvh => options.bvh_up = up.into(),
-        }
+    write_motion(&args.output, &motion, &options)?;
+    let format = match out_format {
+        MotionFormat::Npz => "npz",
+        MotionFormat::Bvh => "bvh",
+    };
+    if args.json {
+        return emit(&serde_json::to_string_pretty(&json!({
+            "in": args.input,
+            "out": args.output,
+            "format": format,
+            "frames": motion.frame_count(),
+            "fps": motion.fps(),
+            "resampled_from_fps": read.resampled_from.map(|(fps, _)| fps),
+            "npz_up": (out_format == MotionFormat::Npz).then(|| up_name(args.npz_up.into())),
+        }))?);
     }
-    if let Some(map) = &args.map {
-        options.bvh_map = match SkeletonPreset::parse(map) {
-            Some(p) => MapChoice::Preset(p),
-            None => {
-                // A name that is no file and has no name-map extension is a mistyped
-                // preset, not a missing file.
-                let path = std::path::Path::new(map);
-                if !path.exists() && !super::has_extension(path, &["toml", "json"]) {
-                    let presets: Vec<&str> = SkeletonPreset::ALL.iter().map(|p| p.name()).collect();
-                    bail!(
-                        "--map {map}: neither a preset ({}) nor a .toml or .json name-map file",
-                        presets.join(", ")
-                    );
-                }
-                MapChoice::Custom(NameMap::read(path).context("--map")?)
-            }
-        };
-    }
-    if let Some(scale) = args.scale {
-        options.bvh_units = BvhUnits::MetresPerUnit(scale);
-    }
-    let read = load_motion(&args.file, &options, args.fps)?;
+    let up = match out_format {
+        MotionFormat::Npz => format!(", {} up", up_name(args.npz_up.into())),
+        MotionFormat::Bvh => ", SMPL skeleton, Y up".to_owned(),
+    };
+    emit(&format!(
+        "wrote {} ({format}{up}): {} frames at {} fps ({:.3} s)",
+        args.output.display(),
+        motion.frame_count(),
+        motion.fps(),
+        motion.duration()
+    ))
+}
+
+fn info(args: &InfoArgs) -> Result<()> {
     // Notes and warnings go to stderr, so stdout stays one parseable report.
-    super::motion_args::report(&args.file, &read);
+    let (read, _) = args.read.load(&args.file)?;
     let (motion, source) = (read.motion, read.source);
     let stats = motion_stats(&motion);
 
