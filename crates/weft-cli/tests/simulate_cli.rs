@@ -219,3 +219,66 @@ fn outputs_are_all_or_nothing_and_bounds_hold() {
     assert!(!out.join("scene.usda").exists(), "stale scene.usda left");
     assert!(stderr(&o).contains("removed"), "{}", stderr(&o));
 }
+
+/// Issue 18 item 3: the material from a TOML file of its fields, and pinned vertices from
+/// the command line or a file; mistakes name the file, the key or the index.
+#[test]
+fn material_files_and_pinned_vertices() {
+    let dir = scratch("material_pin");
+    let g = skirt(&dir);
+    let out = dir.join("out");
+    let run = |extra: &[&str]| {
+        let mut a = vec!["simulate", "--garment", s(&g), "--motion", "walk"];
+        a.extend_from_slice(&["--frames", "2", "--warmup", "1", "--substeps", "2"]);
+        a.extend_from_slice(&["--out", s(&out)]);
+        a.extend_from_slice(extra);
+        weft(&a)
+    };
+    let fabric = dir.join("fabric.toml");
+    std::fs::write(
+        &fabric,
+        "density = 0.15\nyoung_modulus = 5e4\nfriction = 0.3\n",
+    )
+    .unwrap();
+    let pins = dir.join("pins.txt");
+    std::fs::write(&pins, "# a vertex group\n0 1 2\n3-5\n").unwrap();
+    let o = run(&[
+        "--material",
+        s(&fabric),
+        "--attach",
+        "none",
+        "--pin",
+        s(&pins),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("stats.json")).unwrap()).unwrap();
+    assert_eq!(stats["material"], "custom");
+    // That pins hold exactly like the attachment is weft-sim's
+    // `pinned_vertices_follow_the_skin_like_the_attachment`.
+    assert_eq!(stats["totals"]["frames"].as_u64(), Some(2));
+
+    let o = run(&["--pin", "0-3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "densty = 0.15\n").unwrap();
+    for (extra, needle) in [
+        (vec!["--material", s(&bad)], "densty"),
+        (vec!["--material", s(&dir.join("none.toml"))], "none.toml"),
+        (vec!["--pin", "0,x"], "`x` is not a vertex index"),
+        (vec!["--pin", "99999"], "pinned vertex (the garment has"),
+    ] {
+        let o = run(&extra);
+        assert_eq!(o.status.code(), Some(1), "{extra:?}");
+        let e = stderr(&o);
+        assert!(
+            e.contains(needle) && e.trim_end().lines().count() == 1,
+            "{extra:?}: {e}"
+        );
+    }
+    std::fs::write(&bad, "density = -1\n").unwrap();
+    let o = run(&["--material", s(&bad)]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("bad.toml"), "{}", stderr(&o));
+}

@@ -28,7 +28,7 @@ use crate::solver::{ClothSimulator, SimOptions};
 
 /// How a sequence is simulated. A TOML table sets any of these; the others keep the
 /// defaults stated on each field.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SequenceOptions {
     /// Implicit-Euler steps per output frame (`>= 1`). Default: 4.
@@ -55,6 +55,10 @@ pub struct SequenceOptions {
     /// Garment vertices that follow the body's skin (default: the top opening, i.e.
     /// the waistband or neckline; see [`crate::attachment`]).
     pub attachment: Attachment,
+    /// More garment vertices (0-based indices) that follow the body's skin, beside the
+    /// attachment's: straps, a belt, a sewn-on patch, or a whole garment held in place
+    /// with `attachment = "none"`. Default: none.
+    pub pinned: Vec<u32>,
 }
 
 /// [`Skinning`]'s serde form (weft-body has no serde): `lbs` or `dqs`.
@@ -83,6 +87,7 @@ impl Default for SequenceOptions {
             max_initial_penetration: 0.02,
             max_frames: None,
             attachment: Attachment::TopOpening,
+            pinned: Vec::new(),
         }
     }
 }
@@ -320,6 +325,18 @@ pub fn simulate_sequence(
         }
         .into());
     }
+    if let Some(&v) = opts
+        .pinned
+        .iter()
+        .find(|&&v| v as usize >= garment.vertex_count())
+    {
+        return Err(SimError::InvalidParameter {
+            what: format!("pinned vertex (the garment has {})", garment.vertex_count()),
+            value: f64::from(v),
+            expected: "expected 0-based garment vertex indices",
+        }
+        .into());
+    }
     crate::error::check_nonneg(
         || "maximum initial penetration".into(),
         opts.max_initial_penetration,
@@ -374,11 +391,11 @@ pub fn simulate_sequence(
     let mut sim = ClothSimulator::new(garment, material, opts.sim)?;
     let zero = vec![[0.0; 3]; start.positions.len()];
     sim.set_state(start.positions.clone(), zero)?;
-    let anchors = SkinAnchors::new(
-        posed.surface(),
-        &start.positions,
-        &opts.attachment.vertices(garment),
-    )?;
+    let mut held = opts.attachment.vertices(garment);
+    held.extend_from_slice(&opts.pinned);
+    held.sort_unstable();
+    held.dedup();
+    let anchors = SkinAnchors::new(posed.surface(), &start.positions, &held)?;
     sim.pin(anchors.vertices())?;
     let strain = EdgeStrain::new(garment);
 
@@ -740,6 +757,56 @@ mod tests {
         assert!(e.contains("sub-steps") && e.contains("1 to 100"), "{e}");
     }
 
+    /// Issue 18 item 3: pinned vertices follow the skin exactly as the attachment's do
+    /// (pinning the top opening by hand gives the attachment's frames bit for bit), and
+    /// an index past the garment is refused before any frame.
+    #[test]
+    fn pinned_vertices_follow_the_skin_like_the_attachment() {
+        let body = weft_body::default_body().unwrap();
+        let rest = body.shaped(&[]).unwrap().vertices;
+        let skirt = test_skirt(&rest, 16, 4);
+        let run = |opts: &SequenceOptions| {
+            simulate_sequence(
+                &skirt,
+                &Material::cotton(),
+                &body,
+                &[],
+                &walk(3),
+                opts,
+                &mut |_| {},
+            )
+            .unwrap()
+            .frames
+        };
+        let attached = SequenceOptions {
+            warmup_frames: 1,
+            substeps: 2,
+            ..SequenceOptions::default()
+        };
+        let pinned = SequenceOptions {
+            attachment: Attachment::None,
+            pinned: crate::attachment::top_opening(&skirt),
+            ..attached.clone()
+        };
+        assert!(!pinned.pinned.is_empty());
+        assert_eq!(run(&attached), run(&pinned));
+        let free = SequenceOptions {
+            attachment: Attachment::None,
+            ..attached.clone()
+        };
+        assert_ne!(run(&attached), run(&free));
+
+        let bad = SequenceOptions {
+            pinned: vec![0, skirt.vertex_count() as u32],
+            ..SequenceOptions::default()
+        };
+        let e = refusal(|_| {}, &bad);
+        assert!(e.contains("pinned vertex (the garment has"), "{e}");
+        let text = "attachment = \"none\"\npinned = [3, 1, 2]\n";
+        let o: SequenceOptions = toml::from_str(text).unwrap();
+        assert_eq!((o.attachment, o.pinned), (Attachment::None, vec![3, 1, 2]));
+    }
+
     /// A step that diverges ends the run with the frame named and the finished frames
     /// kept.
     #[test]
@@ -809,7 +876,10 @@ mod tests {
         }
         // No sub-steps, or more than MAX_SUBSTEPS; non-finite garment.
         for substeps in [0, MAX_SUBSTEPS + 1] {
-            let bad = SequenceOptions { substeps, ..opts };
+            let bad = SequenceOptions {
+                substeps,
+                ..opts.clone()
+            };
             assert!(matches!(
                 run(&skirt, &Material::silk(), &bad),
                 Err(SequenceError::Input(SimError::InvalidParameter { .. }))

@@ -12,7 +12,7 @@ use weft_bench::multilevel::MultilevelBench;
 use weft_bench::simulate::bench_simulate;
 use weft_bench::Row;
 use weft_mesh::io::load_mesh;
-use weft_sim::{Material, SequenceOptions};
+use weft_sim::SequenceOptions;
 
 use super::body_args::BodyModelArg;
 use super::emit;
@@ -95,8 +95,9 @@ pub struct SimulateArgs {
     vertices: usize,
     #[command(flatten)]
     motion: MotionArgs,
-    /// Material preset: hood, silk, cotton, jersey, denim or leather.
-    #[arg(long, default_value = "silk")]
+    /// Material: a preset (hood, silk, cotton, jersey, denim, leather) or a TOML file of
+    /// its fields (see `weft simulate --help`).
+    #[arg(long, default_value = "silk", value_name = "NAME|FILE.toml")]
     material: String,
     /// Frames to simulate after the warm-up.
     #[arg(long, default_value_t = 30, value_parser = super::frame_count)]
@@ -157,7 +158,7 @@ fn gat(args: &GatArgs) -> Result<()> {
 }
 
 fn simulate(args: &SimulateArgs) -> Result<()> {
-    let material = Material::preset(&args.material).context("--material")?;
+    let material = super::cloth_args::material(&args.material)?;
     let (body, _) = args.common.body.load()?;
     let garment = match &args.garment {
         Some(path) => {

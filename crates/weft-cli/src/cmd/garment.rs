@@ -75,8 +75,9 @@ pub struct GarmentOnBody {
 /// Drape parameters shared by `drape` and `prepare`.
 #[derive(Args)]
 pub struct DrapeFlags {
-    /// Cloth material preset (hood, silk, cotton, jersey, denim, leather).
-    #[arg(long, default_value = "cotton")]
+    /// Cloth material: a preset (hood, silk, cotton, jersey, denim, leather) or a TOML
+    /// file of its fields laid over HOOD's material (see `weft simulate --help`).
+    #[arg(long, default_value = "cotton", value_name = "NAME|FILE.toml")]
     material: String,
     /// Frame budget of the drape (30 fps).
     #[arg(long, default_value = "120")]
@@ -305,7 +306,7 @@ fn write_report(path: Option<&Path>, value: &serde_json::Value) -> Result<()> {
 }
 
 fn drape_options(flags: &DrapeFlags) -> Result<(DrapeOptions, Material)> {
-    let material = Material::preset(&flags.material).context("--material")?;
+    let material = super::cloth_args::material(&flags.material)?;
     let options = DrapeOptions {
         max_frames: number("frames", &flags.frames)?,
         settle_speed: number("settle-speed", &flags.settle_speed)?,

@@ -5,6 +5,7 @@ mod attribute;
 mod bench;
 mod body;
 mod body_args;
+mod cloth_args;
 mod config;
 mod data;
 mod demo;

@@ -14,8 +14,8 @@ use weft_mesh::export::{
 };
 use weft_mesh::io::{load_mesh, write_atomic};
 use weft_sim::{
-    simulate_sequence, Attachment, FrameStats, Material, SequenceError, SequenceOptions,
-    SequenceProgress, SimulatedSequence,
+    simulate_sequence, Attachment, FrameStats, SequenceError, SequenceOptions, SequenceProgress,
+    SimulatedSequence,
 };
 
 use super::body_args::BodyArgs;
@@ -36,8 +36,10 @@ pub struct SimulateArgs {
     /// scene.usda with --usd.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// Material preset: hood, silk, cotton, jersey, denim or leather.
-    #[arg(long, default_value = "cotton")]
+    /// Material: a preset (hood, silk, cotton, jersey, denim, leather) or a TOML file
+    /// of its fields (density, young_modulus, poisson_ratio, thickness,
+    /// bending_stiffness, friction) laid over HOOD's material.
+    #[arg(long, default_value = "cotton", value_name = "NAME|FILE.toml")]
     material: String,
     #[command(flatten)]
     solver: SolverArgs,
@@ -69,7 +71,7 @@ enum AttachArg {
 const DEFAULT_PROCEDURAL_FRAMES: usize = 60;
 
 pub fn run(args: &SimulateArgs) -> Result<()> {
-    let material = Material::preset(&args.material).context("--material")?;
+    let material = super::cloth_args::material(&args.material)?;
     let loaded = load_mesh(&args.garment)
         .with_context(|| format!("reading the garment {}", args.garment.display()))?;
     let garment = loaded.mesh;
@@ -197,12 +199,17 @@ pub struct SolverArgs {
     /// 10000, default 15).
     #[arg(long, value_parser = super::warmup_frames)]
     warmup: Option<usize>,
+    /// Garment vertices held on the body's skin beside the --attach ones: 0-based
+    /// indices and ranges (`0,5,17-30`) or a .txt file of them (e.g. a vertex group
+    /// exported from Blender). Added to the `pinned` list of an --options file.
+    #[arg(long, value_name = "LIST|FILE.txt")]
+    pin: Option<String>,
 }
 
 impl SolverArgs {
     /// `SequenceOptions::default()` with the `--options` file laid over it
     /// ([`weft_config::overlay`]: unknown keys refused, naming the file and the key),
-    /// then `--substeps` and `--warmup`.
+    /// then `--substeps`, `--warmup` and `--pin`.
     pub fn load(&self) -> Result<SequenceOptions> {
         let mut opts = SequenceOptions::default();
         if let Some(path) = &self.options {
@@ -217,6 +224,9 @@ impl SolverArgs {
         }
         if let Some(w) = self.warmup {
             opts.warmup_frames = w;
+        }
+        if let Some(spec) = &self.pin {
+            opts.pinned.extend(super::cloth_args::pinned(spec)?);
         }
         Ok(opts)
     }
