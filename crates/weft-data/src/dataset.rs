@@ -165,12 +165,12 @@ impl Dataset {
     /// The body model the shapes belong to: weft's default body, or the SMPL `.npz`
     /// the config named.
     pub fn body_model(&self) -> Result<weft_body::BodyModel, DataError> {
-        weft_body::BodyModel::load_or_default(self.manifest.config.body.as_deref()).map_err(
-            |source| DataError::Body {
+        weft_body::BodyModel::load_or_default(self.manifest.body_file()).map_err(|source| {
+            DataError::Body {
                 what: "model".into(),
                 source: Box::new(source),
-            },
-        )
+            }
+        })
     }
 }
 

@@ -124,6 +124,14 @@ pub enum DataError {
         #[source]
         source: Box<weft_body::BodyError>,
     },
+    /// An import's input is wrong: the file named, what was found and what was expected.
+    #[error("{}: {message}", .path.display())]
+    Import {
+        /// The import file, cache, rest mesh or motion.
+        path: PathBuf,
+        /// What is wrong and what was expected.
+        message: String,
+    },
     /// Generating or reading a motion failed.
     #[error("motion {id}")]
     Motion {

@@ -6,6 +6,7 @@
 //! * [`plan`]: the config resolved into ids, seeds, shapes and sequences, and the
 //!   no-overlap check.
 //! * [`generate()`]: parallel, resumable, shardable generation through weft-sim.
+//! * [`import()`]: a user's own simulation caches as a dataset.
 //! * [`manifest`] and [`shard`]: the files on disk.
 //! * [`Dataset`]: the loader the training code uses.
 //! * [`info`]: the summary of `weft data info`.
@@ -16,6 +17,7 @@ pub mod config;
 pub mod dataset;
 pub mod error;
 pub mod generate;
+pub mod import;
 pub mod info;
 pub mod manifest;
 pub mod plan;
@@ -30,6 +32,7 @@ pub use generate::{
     generate, GenerateOptions, GenerateReport, Physics, Progress, SequenceSimulator, Silent,
     SimInput, SimOutcome,
 };
+pub use import::{import, ImportReport, ImportSpec};
 pub use info::DatasetInfo;
 pub use manifest::{merge_directory, Job, Manifest, SequenceRecord, Status};
 pub use split::Split;

@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::{DataConfig, FORMAT_VERSION};
 use crate::error::DataError;
+use crate::import::ImportSpec;
 use crate::split::Split;
 
 /// The `format` field of every manifest.
@@ -236,8 +237,12 @@ pub struct Manifest {
     /// Set in the partial manifest of a `--shard i/n` job; absent once merged.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub job: Option<Job>,
-    /// The config it was generated from.
-    pub config: DataConfig,
+    /// The config it was generated from (`weft data generate`); absent for an import.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub config: Option<DataConfig>,
+    /// What it was imported from (`weft data import`); absent for a generated dataset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub import: Option<ImportSpec>,
     /// Garments, train then validation then test.
     pub garments: Vec<GarmentRecord>,
     /// Body shapes, same order.
@@ -292,6 +297,11 @@ impl Manifest {
                 "version {}; this weft reads version {FORMAT_VERSION}",
                 self.version
             )));
+        }
+        if self.config.is_some() == self.import.is_some() {
+            return Err(bad(
+                "expected either the `config` of a generated dataset or the `import` of an imported one".into(),
+            ));
         }
         let garments =
             index_by_id(self.garments.iter().map(|g| (&g.id, g.split)), "garment").map_err(bad)?;
@@ -388,6 +398,16 @@ impl Manifest {
             }
         }
         Ok(())
+    }
+
+    /// The body model file the β belong to (`None`: weft's default body), as the config
+    /// or the import file names it.
+    pub fn body_file(&self) -> Option<&Path> {
+        match (&self.config, &self.import) {
+            (Some(c), _) => c.body.as_deref(),
+            (None, Some(i)) => i.body.as_deref().map(Path::new),
+            (None, None) => None,
+        }
     }
 
     /// The sequences of one split.

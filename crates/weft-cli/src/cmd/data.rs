@@ -1,4 +1,5 @@
-//! `weft data generate | info | merge`: simulated datasets (weft-data).
+//! `weft data generate | import | info | merge`: simulated and imported datasets
+//! (weft-data).
 
 use std::path::PathBuf;
 
@@ -19,6 +20,25 @@ pub enum DataCommand {
     Info(InfoArgs),
     /// Merge the partial manifests of `--shard i/n` jobs into manifest.json.
     Merge(MergeArgs),
+    /// Turn your own simulations (PC2, MDD, .npy or OBJ-sequence caches from Marvelous
+    /// Designer, Houdini, Blender, …, with each garment's rest mesh, the body shape and
+    /// its motion) into a dataset every model trains and evaluates on.
+    Import(ImportArgs),
+}
+
+#[derive(Args)]
+pub struct ImportArgs {
+    /// The import file (TOML): fps, optional body/scale/up, [[garments]] (id, template)
+    /// and [[sequences]] (garment, cache, motion, betas, split, start); paths relative to
+    /// it. See docs/datasets.md ("Importing your own simulations").
+    #[arg(value_name = "IMPORT.toml")]
+    spec: PathBuf,
+    /// The new dataset directory (must not exist or be empty; written all or nothing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Print one JSON object describing what was written.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Args)]
@@ -71,7 +91,34 @@ pub fn run(command: DataCommand) -> Result<()> {
             let path = weft_data::merge_directory(&a.dir)?;
             emit(&format!("wrote {}", path.display()))
         }
+        DataCommand::Import(a) => run_import(&a),
     }
+}
+
+fn run_import(a: &ImportArgs) -> Result<()> {
+    let r = weft_data::import(&a.spec, &a.out)?;
+    let [train, validation, test] = r.sequences;
+    if a.json {
+        return emit(&serde_json::to_string_pretty(&serde_json::json!({
+            "out": r.dir,
+            "train": train,
+            "validation": validation,
+            "test": test,
+            "frames": r.frames,
+            "flattened_uvs": r.flattened,
+        }))?);
+    }
+    for g in &r.flattened {
+        eprintln!(
+            "note: garment {g}: its rest mesh has no UVs; each triangle is laid flat as its rest frame"
+        );
+    }
+    emit(&format!(
+        "imported {} sequences ({train} train, {validation} validation, {test} test; {} frames) into {}",
+        train + validation + test,
+        r.frames,
+        r.dir.display()
+    ))
 }
 
 fn run_generate(a: &GenerateArgs) -> Result<()> {

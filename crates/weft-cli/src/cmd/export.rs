@@ -17,9 +17,9 @@ use super::emit;
 
 #[derive(Args)]
 pub struct ExportArgs {
-    /// The animation: a directory of OBJ frames (read in name order) or a .npy array of
-    /// shape (frames, vertices, 3), f32 or f64.
-    #[arg(long, value_name = "DIR|FILE.npy")]
+    /// The animation: a directory of OBJ frames (read in name order), a .npy array of
+    /// shape (frames, vertices, 3), f32 or f64, or a .pc2 or .mdd point cache.
+    #[arg(long, value_name = "DIR|FILE.npy|FILE.pc2|FILE.mdd")]
     frames: PathBuf,
     /// The template mesh (.obj or .ply) whose faces the frames move; its vertex order
     /// must be the frames' vertex order. Its UVs (OBJ `vt` on every face corner) are

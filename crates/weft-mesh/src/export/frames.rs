@@ -160,24 +160,26 @@ impl Frames {
         bounds(&self.positions)
     }
 
-    /// Reads a frame sequence from a directory of OBJ files ([`read_obj_dir`](Self::read_obj_dir))
-    /// or a `.npy` array ([`read_npy`](Self::read_npy)), by what `path` is.
+    /// Reads a frame sequence from a directory of OBJ files ([`read_obj_dir`](Self::read_obj_dir)),
+    /// a `.npy` array ([`read_npy`](Self::read_npy)) or a PC2 or MDD point cache, by what
+    /// `path` is.
     pub fn load(path: &Path) -> Result<Self, ExportError> {
         let meta = fs::metadata(path).map_err(|e| ExportError::read(path, e))?;
         if meta.is_dir() {
             return Frames::read_obj_dir(path);
         }
-        let is_npy = path
+        let ext = path
             .extension()
             .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
-        if is_npy {
-            Frames::read_npy(path)
-        } else {
-            Err(ExportError::format(
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("npy") => Frames::read_npy(path),
+            Some("pc2") => Ok(super::pc2::read_pc2(path)?.frames),
+            Some("mdd") => Ok(super::mdd::read_mdd(path)?.frames),
+            _ => Err(ExportError::format(
                 path,
-                "expected a directory of .obj frames or a .npy array of shape (frames, vertices, 3)",
-            ))
+                "expected a directory of .obj frames, a .npy array of shape (frames, vertices, 3), or a .pc2 or .mdd point cache",
+            )),
         }
     }
 
@@ -502,8 +504,16 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("expected a directory of .obj frames or a .npy array"),
+            e.contains("expected a directory of .obj frames, a .npy array"),
             "{e}"
         );
+
+        // Point caches read back as the frames written.
+        let f =
+            Frames::from_frames(&[vec![[1.0, 2.0, 3.0]; 4], vec![[0.5, 0.0, -1.0]; 4]]).unwrap();
+        super::super::pc2::write_pc2(&empty.0.join("a.PC2"), &f, Default::default()).unwrap();
+        super::super::mdd::write_mdd(&empty.0.join("a.mdd"), &f, 24.0).unwrap();
+        assert_eq!(Frames::load(&empty.0.join("a.PC2")).unwrap(), f);
+        assert_eq!(Frames::load(&empty.0.join("a.mdd")).unwrap(), f);
     }
 }
