@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use weft_body::{BodyModel, PosedSequence};
-use weft_mesh::export::Frames;
+use weft_mesh::export::{write_obj_with_uvs, Frames};
 use weft_motion::{body_rest_joints, load_motion, Motion, MotionFileOptions, UpAxis};
 use weft_sim::{PosedBody, MAX_GARMENT_GAP};
 
@@ -333,11 +333,15 @@ pub fn import(spec_path: &Path, out: &Path) -> Result<ImportReport, DataError> {
         let motion_id = ids.motion(&mut manifest, &s.motion, s.start, t, s.split);
         let id = format!("{}-{garment_id}-{body_id}-{motion_id}", s.split.name());
         let id = ids.unique(id);
-        if !temp.path().join(garment_path(&garment_id)).exists() {
-            let text = rest.obj_text();
-            let path = temp.path().join(garment_path(&garment_id));
-            weft_mesh::io::write_atomic(&path, |w| w.write_all(text.as_bytes()))
-                .map_err(|e| DataError::io(&path, "cannot write the garment", e))?;
+        let path = temp.path().join(garment_path(&garment_id));
+        if !path.exists() {
+            let uvs = Some(rest.corner_uvs.as_slice());
+            write_obj_with_uvs(&path, &rest.positions, &rest.faces, uvs).map_err(|e| {
+                DataError::Import {
+                    path: path.clone(),
+                    message: e.to_string(),
+                }
+            })?;
         }
         let data = ShardData {
             positions,
@@ -428,38 +432,6 @@ impl RestMesh {
             corner_uvs,
             flattened,
         })
-    }
-
-    /// The mesh as OBJ text with its UVs, for `garments/<id>.obj`.
-    fn obj_text(&self) -> String {
-        use std::fmt::Write as _;
-        let mut s = format!(
-            "# weft data import: {} vertices, {} faces; vt are the corner UVs\n",
-            self.positions.len(),
-            self.faces.len()
-        );
-        for p in &self.positions {
-            let _ = writeln!(s, "v {} {} {}", p[0], p[1], p[2]);
-        }
-        for tri in &self.corner_uvs {
-            for uv in tri {
-                let _ = writeln!(s, "vt {} {}", uv[0], uv[1]);
-            }
-        }
-        for (i, f) in self.faces.iter().enumerate() {
-            let t = 3 * i + 1;
-            let _ = writeln!(
-                s,
-                "f {}/{} {}/{} {}/{}",
-                f[0] + 1,
-                t,
-                f[1] + 1,
-                t + 1,
-                f[2] + 1,
-                t + 2
-            );
-        }
-        s
     }
 }
 

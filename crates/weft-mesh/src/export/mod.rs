@@ -34,7 +34,7 @@ pub use error::ExportError;
 pub use frames::Frames;
 pub use gltf::{write_glb, GlbOptions};
 pub use mdd::write_mdd;
-pub use obj_sequence::{remove_obj_sequence, write_obj_sequence};
+pub use obj_sequence::{remove_obj_sequence, write_obj_sequence, write_obj_with_uvs};
 pub use pc2::{write_pc2, Pc2Timing};
 pub use scene::{AnimatedMesh, CornerUvs, BODY_COLOR, GARMENT_COLOR};
 pub use usd::write_usd;

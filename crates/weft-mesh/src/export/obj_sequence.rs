@@ -142,6 +142,28 @@ fn write_frames_parallel(dir: &Path, frames: &Frames, trailer: &Trailer) -> io::
     }
 }
 
+/// Writes one OBJ at `path` (atomically): `positions` with `faces` and, when given, the
+/// corner `uvs` — a garment template as the OBJ sequence writes each frame.
+pub fn write_obj_with_uvs(
+    path: &Path,
+    positions: &[[f32; 3]],
+    faces: &[[u32; 3]],
+    uvs: Option<&CornerUvs>,
+) -> Result<(), ExportError> {
+    let frames = Frames::from_frames(&[positions.to_vec()])?;
+    frames.check_finite()?;
+    check_faces(faces, positions.len())?;
+    if let Some(uvs) = uvs {
+        check_uvs(faces, uvs)?;
+    }
+    let trailer = Trailer::new(faces, uvs);
+    let mut line = String::new();
+    crate::io::write_atomic(path, |w| {
+        write_frame_to(w, positions, &trailer, 0, 1, &mut line)
+    })
+    .map_err(|e| ExportError::write(path, e))
+}
+
 /// Reads a sequence back: every `.obj` in `dir`, in natural name order (see
 /// [`Frames::read_obj_dir`]).
 pub fn read_obj_sequence(dir: &Path) -> Result<Frames, ExportError> {
@@ -438,6 +460,26 @@ mod tests {
         );
         let e = write_obj_sequence(&out, &FACES, Some(&uvs[..1]), &frames()).unwrap_err();
         assert!(matches!(e, ExportError::UvCount { uvs: 1, faces: 2 }));
+    }
+
+    #[test]
+    fn one_obj_with_uvs_reads_back() {
+        let dir = TestDir::new("obj-uv");
+        let uvs = [
+            [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
+            [[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+        ];
+        let f = frames();
+        let path = dir.0.join("g.obj");
+        write_obj_with_uvs(&path, f.frame(1).unwrap(), &FACES, Some(&uvs)).unwrap();
+        let r = crate::io::load_obj(&path).unwrap();
+        assert_eq!(r.corner_uvs.unwrap(), uvs.to_vec());
+        assert_eq!(r.mesh.faces, FACES.to_vec());
+        assert_eq!(
+            r.mesh.positions[3].map(|c| c as f32),
+            f.frame(1).unwrap()[3]
+        );
+        assert!(write_obj_with_uvs(&path, f.frame(1).unwrap(), &[[0, 1, 9]], None).is_err());
     }
 
     /// Issue 17 item 12: missing parents are created; a stale sequence is removed only
