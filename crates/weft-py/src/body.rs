@@ -1,6 +1,7 @@
 //! `weft.Body`: an SMPL-format body model (weft's default or a user's `.npz`), shaped
 //! by β and posed by SMPL parameters.
 
+use std::borrow::Cow;
 use std::path::PathBuf;
 
 use numpy::{PyArray2, PyArray3, PyReadonlyArray3};
@@ -95,6 +96,14 @@ impl Body {
             .filter_map(|t| posed.frame(t).map(<[_]>::to_vec))
             .collect();
         to_3d(py, &frames)
+    }
+}
+
+/// `body`'s model, or weft's default body when none is given.
+pub fn model_of(body: Option<&Body>) -> PyResult<Cow<'_, BodyModel>> {
+    match body {
+        Some(b) => Ok(Cow::Borrowed(&b.model)),
+        None => Ok(Cow::Owned(weft_body::default_body().map_err(value_error)?)),
     }
 }
 

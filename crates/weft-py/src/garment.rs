@@ -9,7 +9,7 @@ use weft_garment::{FitBody, GarmentKind, Style};
 use weft_mesh::TriMesh;
 
 use crate::arrays::{to_2d, to_3d};
-use crate::body::Body;
+use crate::body::{model_of, Body};
 use crate::error::{os_error, value_error};
 
 /// A garment: rest positions `(N, 3)`, triangles `(F, 3)` and, when it has them, the
@@ -21,18 +21,23 @@ pub struct Garment {
     kind: String,
 }
 
+impl Garment {
+    /// The rest positions as stored in files and arrays.
+    fn positions_f32(&self) -> Vec<[f32; 3]> {
+        self.mesh
+            .positions
+            .iter()
+            .map(|p| p.map(|c| c as f32))
+            .collect()
+    }
+}
+
 #[pymethods]
 impl Garment {
     /// Rest positions, `float32` `(N, 3)`.
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f32>> {
-        let p: Vec<[f32; 3]> = self
-            .mesh
-            .positions
-            .iter()
-            .map(|p| p.map(|c| c as f32))
-            .collect();
-        to_2d(py, &p)
+        to_2d(py, &self.positions_f32())
     }
 
     /// Triangles, `uint32` `(F, 3)`.
@@ -67,12 +72,7 @@ impl Garment {
 
     /// Writes the garment as OBJ with its UVs (`vt`, `f v/vt`), atomically.
     fn save(&self, path: PathBuf) -> PyResult<()> {
-        let p: Vec<[f32; 3]> = self
-            .mesh
-            .positions
-            .iter()
-            .map(|p| p.map(|c| c as f32))
-            .collect();
+        let p = self.positions_f32();
         weft_mesh::export::write_obj_with_uvs(&path, &p, &self.mesh.faces, self.uvs.as_deref())
             .map_err(os_error)
     }
@@ -100,14 +100,8 @@ pub fn generate_garment(
     betas: Vec<f64>,
 ) -> PyResult<Garment> {
     let kind = GarmentKind::parse(kind).map_err(value_error)?;
-    let default;
-    let model = match body {
-        Some(b) => &b.model,
-        None => {
-            default = weft_body::default_body().map_err(value_error)?;
-            &default
-        }
-    };
+    let model = model_of(body)?;
+    let model = model.as_ref();
     let fit = FitBody::new(model, &betas).map_err(value_error)?;
     let g = fit
         .generate(kind, &Style::from_seed(kind, seed), vertices)

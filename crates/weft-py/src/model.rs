@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use weft_models::{load_deformer, Deformer};
 
 use crate::arrays::to_3d;
-use crate::body::Body;
+use crate::body::{model_of, Body};
 use crate::error::value_error;
 use crate::garment::Garment;
 use crate::motion::Motion;
@@ -46,14 +46,8 @@ impl Run {
         betas: Vec<f32>,
         body: Option<&Body>,
     ) -> PyResult<Bound<'py, PyArray3<f32>>> {
-        let default;
-        let model = match body {
-            Some(b) => &b.model,
-            None => {
-                default = weft_body::default_body().map_err(value_error)?;
-                &default
-            }
-        };
+        let model = model_of(body)?;
+        let model = model.as_ref();
         let deformer = self.deformer.as_ref();
         let (mesh, motion) = (&garment.mesh, &motion.inner);
         let frames = py

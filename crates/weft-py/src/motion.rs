@@ -11,7 +11,7 @@ use weft_motion::{
 };
 
 use crate::arrays::{coerce, rows3, to_2d, to_3d};
-use crate::body::{to_poses, Body};
+use crate::body::{model_of, to_poses, Body};
 use crate::error::{invalid, os_error, value_error};
 
 /// A motion: SMPL poses `(T, 24, 3)`, root translations `(T, 3)` and a frame rate.
@@ -98,14 +98,8 @@ fn file_options(
     betas: &[f64],
     up: Option<UpAxis>,
 ) -> PyResult<MotionFileOptions> {
-    let default;
-    let model = match body {
-        Some(b) => &b.model,
-        None => {
-            default = weft_body::default_body().map_err(value_error)?;
-            &default
-        }
-    };
+    let model = model_of(body)?;
+    let model = model.as_ref();
     let rest = body_rest_joints(model, betas).map_err(value_error)?;
     Ok(MotionFileOptions::for_body(rest, up))
 }

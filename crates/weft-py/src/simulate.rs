@@ -6,7 +6,7 @@ use pyo3::types::PyDict;
 use weft_sim::{simulate_sequence, Attachment, Material, SequenceOptions};
 
 use crate::arrays::to_3d;
-use crate::body::Body;
+use crate::body::{model_of, Body};
 use crate::error::{invalid, value_error};
 use crate::garment::Garment;
 use crate::motion::Motion;
@@ -56,14 +56,8 @@ pub fn simulate<'py>(
         pinned,
         ..SequenceOptions::default()
     };
-    let default;
-    let model = match body {
-        Some(b) => &b.model,
-        None => {
-            default = weft_body::default_body().map_err(value_error)?;
-            &default
-        }
-    };
+    let model = model_of(body)?;
+    let model = model.as_ref();
     let (mesh, motion) = (&garment.mesh, &motion.inner);
     // A diverged run is an error naming the frame (the finished frames are not
     // returned: a Python caller wants all of them or an exception).
