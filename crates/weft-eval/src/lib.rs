@@ -22,6 +22,7 @@ pub mod metrics;
 pub mod pictures;
 pub mod quadrature;
 pub mod report;
+pub mod skinned;
 pub mod stats;
 
 pub use error::EvalError;

@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 use weft_body::PosedSequence;
 use weft_eval::animate::{animate, push_out_of_body, write_animation};
+use weft_eval::skinned::write_skinned_animation;
 use weft_mesh::export::ExportFormat;
 use weft_models::load_deformer;
 
@@ -39,6 +40,11 @@ pub struct AnimateArgs {
     /// UVs go into obj, glb and usd).
     #[arg(long, value_name = "obj|pc2|mdd|glb|usd")]
     format: String,
+    /// glb only: a skinned glTF for game engines (the body's skeleton animated, body and
+    /// garment skinned to it, per-frame corrective morph targets) instead of one morph
+    /// target per frame.
+    #[arg(long)]
+    skinned: bool,
     /// Post-process: move predicted vertices that are inside the posed body, or within
     /// this many millimetres of it, to its surface plus that distance. The network has
     /// no hard contact constraint (legs can pass through a predicted skirt); 4 is the
@@ -52,6 +58,12 @@ pub struct AnimateArgs {
 
 pub fn run(args: &AnimateArgs) -> Result<()> {
     let format: ExportFormat = args.format.parse().context("--format")?;
+    if args.skinned && format != ExportFormat::Glb {
+        anyhow::bail!(
+            "--skinned applies to --format glb only, not {}",
+            format.name()
+        );
+    }
     if let Some(mm) = args.push_out {
         if !(mm.is_finite() && mm >= 0.0) {
             anyhow::bail!("--push-out {mm}: expected a distance in millimetres >= 0");
@@ -98,15 +110,27 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         ),
         _ => None,
     };
-    write_animation(
-        format,
-        &garment,
-        loaded.corner_uvs.as_deref(),
-        &frames,
-        motion.fps(),
-        bodies.as_ref().map(|b| (body.faces(), b.as_slice())),
-        &args.out,
-    )?;
+    if args.skinned {
+        write_skinned_animation(
+            &garment,
+            loaded.corner_uvs.as_deref(),
+            &frames,
+            &body,
+            &betas,
+            &motion,
+            &args.out,
+        )?;
+    } else {
+        write_animation(
+            format,
+            &garment,
+            loaded.corner_uvs.as_deref(),
+            &frames,
+            motion.fps(),
+            bodies.as_ref().map(|b| (body.faces(), b.as_slice())),
+            &args.out,
+        )?;
+    }
     if args.json {
         emit(&serde_json::to_string_pretty(&json!({
             "out": args.out,

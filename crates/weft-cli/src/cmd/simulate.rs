@@ -8,11 +8,13 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use weft_body::{BodyModel, PosedSequence};
+use weft_eval::skinned::write_skinned_animation;
 use weft_mesh::export::{
     remove_obj_sequence, write_obj_sequence, write_pc2, write_usd, AnimatedMesh, CornerUvs, Frames,
     Pc2Timing, BODY_COLOR, GARMENT_COLOR,
 };
 use weft_mesh::io::{load_mesh, write_atomic};
+use weft_mesh::TriMesh;
 use weft_sim::{
     simulate_sequence, Attachment, FrameStats, SequenceError, SequenceOptions, SequenceProgress,
     SimulatedSequence,
@@ -33,7 +35,7 @@ pub struct SimulateArgs {
     #[command(flatten)]
     motion: MotionArgs,
     /// Output directory (created): frames.pc2, frames.npy, stats.json, obj/ with --obj,
-    /// scene.usda with --usd.
+    /// scene.usda with --usd, scene.glb with --glb.
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
     /// Material: a preset (hood, silk, cotton, jersey, denim, leather) or a TOML file
@@ -54,6 +56,12 @@ pub struct SimulateArgs {
     /// time-sampled USD meshes, Y up, metres, at the motion's frame rate.
     #[arg(long)]
     usd: bool,
+    /// Also write DIR/scene.glb: a skinned glTF for game engines — the body's skeleton
+    /// animated by the motion, body and garment skinned to it (the garment with weights
+    /// transferred from the body), per-frame corrective morph targets making each frame
+    /// exact.
+    #[arg(long)]
+    glb: bool,
     /// Garment vertices that follow the body's skin: `top` (the highest opening — a
     /// waistband or neckline — as a sewn-in elastic would hold it) or `none` (contact
     /// and friction only; loose templates may slide down).
@@ -141,6 +149,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         motion: &motion,
     };
     let template = Template {
+        rest: &garment.positions,
         faces: &garment.faces,
         uvs: loaded.corner_uvs.as_deref(),
     };
@@ -263,8 +272,9 @@ fn totals(seq: &SimulatedSequence) -> serde_json::Value {
     })
 }
 
-/// The garment's faces and UVs, for the OBJ and USD outputs.
+/// The garment's rest positions, faces and UVs, for the OBJ, USD and glTF outputs.
 struct Template<'a> {
+    rest: &'a [[f64; 3]],
     faces: &'a [[u32; 3]],
     uvs: Option<&'a CornerUvs>,
 }
@@ -341,12 +351,28 @@ fn write_outputs(
             },
         ];
         write_usd(&usd, &meshes, info.fps as f32)?;
-    } else if usd.is_file() {
-        std::fs::remove_file(&usd).with_context(|| format!("removing {}", usd.display()))?;
-        eprintln!(
-            "removed {}: the USD scene of an earlier run (this one wrote none; --usd writes one)",
-            usd.display()
-        );
+    }
+    let glb = out.join("scene.glb");
+    if args.glb {
+        let garment = TriMesh::new(template.rest.to_vec(), template.faces.to_vec());
+        write_skinned_animation(
+            &garment,
+            template.uvs,
+            &seq.frames,
+            body.model,
+            body.betas,
+            body.motion,
+            &glb,
+        )?;
+    }
+    for (path, wanted, flag) in [(&usd, args.usd, "--usd"), (&glb, args.glb, "--glb")] {
+        if !wanted && path.is_file() {
+            std::fs::remove_file(path).with_context(|| format!("removing {}", path.display()))?;
+            eprintln!(
+                "removed {}: the scene of an earlier run (this one wrote none; {flag} writes one)",
+                path.display()
+            );
+        }
     }
     let stats = json!({
         "garment": info.garment.display().to_string(),

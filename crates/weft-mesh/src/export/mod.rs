@@ -32,7 +32,7 @@ use std::str::FromStr;
 
 pub use error::ExportError;
 pub use frames::Frames;
-pub use gltf::{write_glb, GlbOptions};
+pub use gltf::{write_glb, write_skinned_glb, GlbOptions, Skeleton, SkinBinding};
 pub use mdd::write_mdd;
 pub use obj_sequence::{remove_obj_sequence, write_obj_sequence, write_obj_with_uvs};
 pub use pc2::{write_pc2, Pc2Timing};

@@ -76,7 +76,7 @@ pub fn frames_of(mesh: &TriMesh, t: usize, amplitude: f64) -> Frames {
 
 /// Cylindrical UVs (angle around Y, height) with a seam where the angle wraps: the
 /// faces across it get the angle unwrapped, so seam vertices carry two UVs.
-fn seamed_uvs(mesh: &TriMesh) -> Vec<[[f32; 2]; 3]> {
+pub fn seamed_uvs(mesh: &TriMesh) -> Vec<[[f32; 2]; 3]> {
     mesh.faces
         .iter()
         .map(|f| {

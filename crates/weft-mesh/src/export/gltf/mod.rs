@@ -45,6 +45,9 @@ use super::scene::{check_scene, AnimatedMesh, IndexedUvs};
 use super::{frame_times, Frames};
 use crate::io::write_atomic;
 
+mod skin;
+pub use skin::{write_skinned_glb, Skeleton, SkinBinding};
+
 /// `glTF` in ASCII, little-endian.
 const GLB_MAGIC: u32 = 0x4654_6C67;
 /// Chunk type `JSON`.
@@ -87,13 +90,13 @@ pub fn write_glb(
     meshes: &[AnimatedMesh<'_>],
     options: GlbOptions,
 ) -> Result<(), ExportError> {
-    let doc = Document::build(meshes, options)?;
+    let doc = Document::build(meshes, options, None)?;
     write_atomic(path, |w| doc.write_to(w)).map_err(|e| ExportError::write(path, e))
 }
 
 /// The `.glb` bytes in memory (for tests and small scenes); see [`write_glb`].
 pub fn glb_bytes(meshes: &[AnimatedMesh<'_>], options: GlbOptions) -> Result<Vec<u8>, ExportError> {
-    let doc = Document::build(meshes, options)?;
+    let doc = Document::build(meshes, options, None)?;
     let mut out = Vec::with_capacity(doc.total_len);
     doc.write_to(&mut out)
         .map_err(|e| ExportError::write("<memory>", e))?;
@@ -159,8 +162,17 @@ impl<'a> Layout<'a> {
 }
 
 impl<'a> Document<'a> {
-    fn build(meshes: &[AnimatedMesh<'a>], options: GlbOptions) -> Result<Self, ExportError> {
-        let frame_count = check_scene(meshes)?;
+    /// Lays out `meshes` (morph-animated, or with `skin` skinned to its skeleton, one
+    /// binding per mesh).
+    fn build(
+        meshes: &[AnimatedMesh<'a>],
+        options: GlbOptions,
+        skin: Option<skin::SkinInput<'a>>,
+    ) -> Result<Self, ExportError> {
+        let mut frame_count = check_scene(meshes)?;
+        if let Some(skin) = &skin {
+            frame_count = skin.check(meshes, frame_count)?;
+        }
         let times = frame_times(frame_count, options.fps)?;
 
         let mut l = Layout {
@@ -175,7 +187,18 @@ impl<'a> Document<'a> {
         let mut animated_nodes = Vec::new();
         for (i, m) in meshes.iter().enumerate() {
             let split = m.uvs.map(|uvs| SeamSplit::new(m.faces, uvs));
-            let (attributes, targets) = mesh_data(&mut l, m, split.as_ref(), options.normals)?;
+            // The base shape: frame 0, or the bind pose of a skinned mesh (whose frames
+            // are then its per-frame correctives in the bind pose).
+            let binding = skin.as_ref().map(|s| &s.bindings[i]);
+            let base = match binding {
+                Some(b) => b.rest,
+                None => m.frames.frame(0).unwrap_or(&[]),
+            };
+            let (mut attributes, targets) =
+                mesh_data(&mut l, m, base, split.as_ref(), options.normals)?;
+            if let Some(b) = binding {
+                skin::attributes(&mut l, b, split.as_ref(), &mut attributes);
+            }
             let faces = match split {
                 Some(split) => Cow::Owned(split.faces),
                 None => Cow::Borrowed(m.faces),
@@ -210,7 +233,21 @@ impl<'a> Document<'a> {
             }
             mesh["primitives"] = json!([primitive]);
             json_meshes.push(mesh);
-            nodes.push(json!({"name": m.name, "mesh": i}));
+            let mut node = json!({"name": m.name, "mesh": i});
+            if skin.is_some() {
+                node["skin"] = json!(0);
+            }
+            nodes.push(node);
+        }
+        let mut scene_nodes: Vec<usize> = (0..meshes.len()).collect();
+        let mut skins = None;
+        let mut joint_channels = Vec::new();
+        if let Some(skin) = &skin {
+            let first_joint = nodes.len();
+            nodes.extend(skin.skeleton.nodes(first_joint));
+            scene_nodes.push(first_joint);
+            skins = Some(json!([skin.skeleton.skin(&mut l, first_joint)]));
+            joint_channels = skin.skeleton.channels(&mut l, first_joint);
         }
 
         let mut root = json!({
@@ -220,13 +257,25 @@ impl<'a> Document<'a> {
                 "extras": {"units": "metres, seconds; Y up", "fps": options.fps},
             },
             "scene": 0,
-            "scenes": [{"name": "weft", "nodes": (0..meshes.len()).collect::<Vec<_>>()}],
+            "scenes": [{"name": "weft", "nodes": scene_nodes}],
             "nodes": nodes,
             "meshes": json_meshes,
             "materials": materials,
         });
-        if !animated_nodes.is_empty() {
-            root["animations"] = json!([animation(&mut l, &times, &animated_nodes)?]);
+        if let Some(skins) = skins {
+            root["skins"] = skins;
+        }
+        // Skeletal animation plays between frames too, so its correctives blend
+        // (LINEAR); a morph-only animation shows each frame exactly (STEP).
+        let interpolation = if skin.is_some() { "LINEAR" } else { "STEP" };
+        if !animated_nodes.is_empty() || !joint_channels.is_empty() {
+            root["animations"] = json!([animation(
+                &mut l,
+                &times,
+                &animated_nodes,
+                interpolation,
+                joint_channels
+            )?]);
         }
         root["accessors"] = Value::Array(std::mem::take(&mut l.accessors));
         root["bufferViews"] = Value::Array(std::mem::take(&mut l.views));
@@ -340,6 +389,7 @@ fn gather<'b, T: Copy + 'b>(
 fn mesh_data<'a>(
     l: &mut Layout<'a>,
     m: &AnimatedMesh<'a>,
+    base: &'a [[f32; 3]],
     split: Option<&SeamSplit>,
     with_normals: bool,
 ) -> Result<(Value, Vec<Value>), ExportError> {
@@ -351,8 +401,6 @@ fn mesh_data<'a>(
     let vec3_len = n
         .checked_mul(12)
         .ok_or_else(|| too_large("the vertex count", n))?;
-    // Frame 0 exists: checked by the caller.
-    let base = frames.frame(0).unwrap_or(&[]);
     let (lo, hi) = bounds(base).unwrap_or(([0.0; 3], [0.0; 3]));
     let src = source.clone();
     let view = l.view(vec3_len, Some(ARRAY_BUFFER), None, move |w| {
@@ -466,8 +514,15 @@ fn index_accessor<'a>(
     })))
 }
 
-/// The sampler times, the one-hot weights, and one `STEP` channel per animated node.
-fn animation(l: &mut Layout<'_>, times: &[f32], nodes: &[usize]) -> Result<Value, ExportError> {
+/// The sampler times, the one-hot morph weights with one channel per morph-animated
+/// node, and `joints`: (sampler output accessor, node, path) of a skeleton's channels.
+fn animation(
+    l: &mut Layout<'_>,
+    times: &[f32],
+    nodes: &[usize],
+    interpolation: &str,
+    joints: Vec<(usize, usize, &'static str)>,
+) -> Result<Value, ExportError> {
     let t = times.len();
     let times = times.to_vec();
     let (first, last) = (times[0], times[t - 1]);
@@ -486,35 +541,40 @@ fn animation(l: &mut Layout<'_>, times: &[f32], nodes: &[usize]) -> Result<Value
         "min": [f64::from(first)],
         "max": [f64::from(last)],
     }));
-    let weights_len = t
-        .checked_mul(t)
-        .and_then(|x| x.checked_mul(4))
-        .ok_or_else(|| too_large("the frame count", t))?;
-    let output_view = l.view(weights_len, None, None, move |w| {
-        // Key k: weight 1 for target k, 0 for the others.
-        let mut row = vec![0u8; t * 4];
-        for k in 0..t {
-            row[k * 4..k * 4 + 4].copy_from_slice(&1f32.to_le_bytes());
-            w.write_all(&row)?;
-            row[k * 4..k * 4 + 4].copy_from_slice(&0f32.to_le_bytes());
-        }
-        Ok(())
-    });
-    let output = l.accessor(json!({
-        "bufferView": output_view,
-        "componentType": FLOAT,
-        "count": t * t,
-        "type": "SCALAR",
-    }));
-    let samplers: Vec<Value> = nodes
-        .iter()
-        .map(|_| json!({"input": input, "output": output, "interpolation": "STEP"}))
-        .collect();
-    let channels: Vec<Value> = nodes
-        .iter()
-        .enumerate()
-        .map(|(s, &node)| json!({"sampler": s, "target": {"node": node, "path": "weights"}}))
-        .collect();
+    let output = if nodes.is_empty() {
+        None
+    } else {
+        let weights_len = t
+            .checked_mul(t)
+            .and_then(|x| x.checked_mul(4))
+            .ok_or_else(|| too_large("the frame count", t))?;
+        let output_view = l.view(weights_len, None, None, move |w| {
+            // Key k: weight 1 for target k, 0 for the others.
+            let mut row = vec![0u8; t * 4];
+            for k in 0..t {
+                row[k * 4..k * 4 + 4].copy_from_slice(&1f32.to_le_bytes());
+                w.write_all(&row)?;
+                row[k * 4..k * 4 + 4].copy_from_slice(&0f32.to_le_bytes());
+            }
+            Ok(())
+        });
+        Some(l.accessor(json!({
+            "bufferView": output_view,
+            "componentType": FLOAT,
+            "count": t * t,
+            "type": "SCALAR",
+        })))
+    };
+    let mut samplers = Vec::new();
+    let mut channels = Vec::new();
+    let all = output
+        .into_iter()
+        .flat_map(|o| nodes.iter().map(move |&node| (o, node, "weights")))
+        .chain(joints);
+    for (s, (output, node, path)) in all.enumerate() {
+        samplers.push(json!({"input": input, "output": output, "interpolation": interpolation}));
+        channels.push(json!({"sampler": s, "target": {"node": node, "path": path}}));
+    }
     Ok(json!({"name": "weft", "samplers": samplers, "channels": channels}))
 }
 
