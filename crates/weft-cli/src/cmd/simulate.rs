@@ -8,10 +8,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use weft_body::{BodyModel, PosedSequence};
+use weft_eval::animate::write_animation;
 use weft_eval::skinned::write_skinned_animation;
 use weft_mesh::export::{
-    remove_obj_sequence, write_obj_sequence, write_pc2, write_usd, AnimatedMesh, CornerUvs, Frames,
-    Pc2Timing, BODY_COLOR, GARMENT_COLOR,
+    remove_obj_sequence, write_obj_sequence, write_pc2, CornerUvs, ExportFormat, Frames, Pc2Timing,
 };
 use weft_mesh::io::{load_mesh, write_atomic};
 use weft_mesh::TriMesh;
@@ -149,8 +149,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         motion: &motion,
     };
     let template = Template {
-        rest: &garment.positions,
-        faces: &garment.faces,
+        mesh: &garment,
         uvs: loaded.corner_uvs.as_deref(),
     };
     let info = Info {
@@ -272,10 +271,9 @@ fn totals(seq: &SimulatedSequence) -> serde_json::Value {
     })
 }
 
-/// The garment's rest positions, faces and UVs, for the OBJ, USD and glTF outputs.
+/// The garment's rest mesh and UVs, for the OBJ, USD and glTF outputs.
 struct Template<'a> {
-    rest: &'a [[f64; 3]],
-    faces: &'a [[u32; 3]],
+    mesh: &'a TriMesh,
     uvs: Option<&'a CornerUvs>,
 }
 
@@ -289,21 +287,16 @@ struct BodyScene<'a> {
 impl BodyScene<'_> {
     /// The body's vertices at the first `frames` frames of the motion (output frame k is
     /// motion frame k).
-    fn frames(&self, frames: usize) -> Result<Frames> {
+    fn frames(&self, frames: usize) -> Result<Vec<Vec<[f32; 3]>>> {
         let posed = PosedSequence::new(
             self.model,
             self.betas,
-            self.motion.poses(),
-            self.motion.trans(),
+            &self.motion.poses()[..frames],
+            &self.motion.trans()[..frames],
         )?;
-        let mut out = Frames::with_vertex_count(self.model.vertex_count())?;
-        for t in 0..frames {
-            let mesh = posed
-                .mesh(t)
-                .with_context(|| format!("posing the body at frame {t}"))?;
-            out.push_frame_f64(&mesh.positions)?;
-        }
-        Ok(out)
+        Ok((0..frames)
+            .filter_map(|t| posed.frame(t).map(<[_]>::to_vec))
+            .collect())
     }
 }
 
@@ -324,7 +317,12 @@ fn write_outputs(
         .write_npy(&out.join("frames.npy"))
         .with_context(|| format!("writing {}", out.join("frames.npy").display()))?;
     if args.obj {
-        write_obj_sequence(&out.join("obj"), template.faces, template.uvs, &frames)?;
+        write_obj_sequence(
+            &out.join("obj"),
+            &template.mesh.faces,
+            template.uvs,
+            &frames,
+        )?;
     } else if remove_obj_sequence(&out.join("obj"))? {
         eprintln!(
             "removed {}: the OBJ sequence of an earlier run (this one wrote none; --obj writes one)",
@@ -333,30 +331,23 @@ fn write_outputs(
     }
     let usd = out.join("scene.usda");
     if args.usd {
-        let body_frames = body.frames(frames.frame_count())?;
-        let meshes = [
-            AnimatedMesh {
-                name: "garment",
-                faces: template.faces,
-                uvs: template.uvs,
-                frames: &frames,
-                color: GARMENT_COLOR,
-            },
-            AnimatedMesh {
-                name: "body",
-                faces: body.model.faces(),
-                uvs: None,
-                frames: &body_frames,
-                color: BODY_COLOR,
-            },
-        ];
-        write_usd(&usd, &meshes, info.fps as f32)?;
+        let bodies = body.frames(seq.frames.len())?;
+        let body = Some((body.model.faces(), bodies.as_slice()));
+        let fps = info.fps;
+        write_animation(
+            ExportFormat::Usd,
+            template.mesh,
+            template.uvs,
+            &seq.frames,
+            fps,
+            body,
+            &usd,
+        )?;
     }
     let glb = out.join("scene.glb");
     if args.glb {
-        let garment = TriMesh::new(template.rest.to_vec(), template.faces.to_vec());
         write_skinned_animation(
-            &garment,
+            template.mesh,
             template.uvs,
             &seq.frames,
             body.model,
