@@ -420,11 +420,7 @@ fn mesh_data<'a>(
     if let Some(split) = split {
         let texcoords = split.texcoords.clone();
         let view = l.view(n * 8, Some(ARRAY_BUFFER), None, move |w| {
-            let mut buf = Vec::with_capacity(texcoords.len() * 8);
-            for c in texcoords.as_flattened() {
-                buf.extend_from_slice(&c.to_le_bytes());
-            }
-            w.write_all(&buf)
+            write_le(w, texcoords.as_flattened())
         });
         attributes["TEXCOORD_0"] = json!(l.accessor(json!({
             "bufferView": view,
@@ -526,13 +522,7 @@ fn animation(
     let t = times.len();
     let times = times.to_vec();
     let (first, last) = (times[0], times[t - 1]);
-    let input_view = l.view(t * 4, None, None, move |w| {
-        let mut buf = Vec::with_capacity(times.len() * 4);
-        for x in &times {
-            buf.extend_from_slice(&x.to_le_bytes());
-        }
-        w.write_all(&buf)
-    });
+    let input_view = l.view(t * 4, None, None, move |w| write_le(w, &times));
     let input = l.accessor(json!({
         "bufferView": input_view,
         "componentType": FLOAT,
@@ -608,6 +598,33 @@ fn too_large(what: &'static str, value: usize) -> ExportError {
         value: value as u64,
         max: u64::from(u32::MAX),
     }
+}
+
+/// A number of the binary chunk, written little-endian.
+pub(super) trait LittleEndian: Copy {
+    /// Appends the number's bytes.
+    fn put(self, buf: &mut Vec<u8>);
+}
+
+impl LittleEndian for f32 {
+    fn put(self, buf: &mut Vec<u8>) {
+        buf.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+impl LittleEndian for u16 {
+    fn put(self, buf: &mut Vec<u8>) {
+        buf.extend_from_slice(&self.to_le_bytes());
+    }
+}
+
+/// `values` little-endian, in one write.
+pub(super) fn write_le<T: LittleEndian>(w: &mut dyn Write, values: &[T]) -> io::Result<()> {
+    let mut buf = Vec::with_capacity(std::mem::size_of_val(values));
+    for &v in values {
+        v.put(&mut buf);
+    }
+    w.write_all(&buf)
 }
 
 /// Writes `f32` triples little-endian, in blocks.

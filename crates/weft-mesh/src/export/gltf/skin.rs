@@ -17,7 +17,9 @@ use std::path::Path;
 
 use serde_json::{json, Value};
 
-use super::{write_vec3s, AnimatedMesh, Document, ExportError, GlbOptions, Layout, SeamSplit};
+use super::{
+    write_le, write_vec3s, AnimatedMesh, Document, ExportError, GlbOptions, Layout, SeamSplit,
+};
 use super::{ARRAY_BUFFER, FLOAT};
 use crate::io::write_atomic;
 
@@ -202,19 +204,18 @@ impl Skeleton<'_> {
     pub(super) fn skin(&self, l: &mut Layout<'_>, first: usize) -> Value {
         let rest = self.rest.to_vec();
         let j = rest.len();
-        let view = l.view(j * 64, None, None, move |w| {
-            let mut buf = Vec::with_capacity(j * 64);
-            for p in &rest {
-                // Column-major 4 × 4: identity with the last column (−p, 1).
-                let m = [
+        // Column-major 4 × 4: identity with the last column (−p, 1).
+        let matrices: Vec<[f32; 16]> = rest
+            .iter()
+            .map(|p| {
+                [
                     1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -p[0], -p[1],
-                    -p[2], 1.0f32,
-                ];
-                for x in m {
-                    buf.extend_from_slice(&x.to_le_bytes());
-                }
-            }
-            w.write_all(&buf)
+                    -p[2], 1.0,
+                ]
+            })
+            .collect();
+        let view = l.view(j * 64, None, None, move |w| {
+            write_le(w, matrices.as_flattened())
         });
         let matrices = l.accessor(json!({
             "bufferView": view,
@@ -242,11 +243,7 @@ impl Skeleton<'_> {
         for k in 0..self.rest.len() {
             let quats: Vec<[f32; 4]> = self.rotations.iter().map(|r| unit(r[k])).collect();
             let view = l.view(t * 16, None, None, move |w| {
-                let mut buf = Vec::with_capacity(quats.len() * 16);
-                for c in quats.as_flattened() {
-                    buf.extend_from_slice(&c.to_le_bytes());
-                }
-                w.write_all(&buf)
+                write_le(w, quats.as_flattened())
             });
             let output = l.accessor(json!({
                 "bufferView": view,
@@ -311,11 +308,7 @@ pub(super) fn attributes<'a>(
         })
         .collect();
     let view = l.view(n * 8, Some(ARRAY_BUFFER), None, move |w| {
-        let mut buf = Vec::with_capacity(joints.len() * 8);
-        for x in joints.as_flattened() {
-            buf.extend_from_slice(&x.to_le_bytes());
-        }
-        w.write_all(&buf)
+        write_le(w, joints.as_flattened())
     });
     attributes["JOINTS_0"] = json!(l.accessor(json!({
         "bufferView": view,
@@ -324,11 +317,7 @@ pub(super) fn attributes<'a>(
         "type": "VEC4",
     })));
     let view = l.view(n * 16, Some(ARRAY_BUFFER), None, move |w| {
-        let mut buf = Vec::with_capacity(weights.len() * 16);
-        for x in weights.as_flattened() {
-            buf.extend_from_slice(&x.to_le_bytes());
-        }
-        w.write_all(&buf)
+        write_le(w, weights.as_flattened())
     });
     attributes["WEIGHTS_0"] = json!(l.accessor(json!({
         "bufferView": view,
