@@ -82,7 +82,9 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let started = Instant::now();
     let mut frames = animate(deformer.as_ref(), &garment, &body, &betas, &motion)?;
     let seconds = started.elapsed().as_secs_f64();
-    let posed = if args.push_out.is_some() || format.holds_scene() {
+    // The body goes into a morph-target scene here; a skinned one poses it itself.
+    let scene_body = format.holds_scene() && !args.skinned;
+    let posed = if args.push_out.is_some() || scene_body {
         Some(PosedSequence::new(
             &body,
             &betas,
@@ -97,7 +99,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         _ => None,
     };
     let bodies = match &posed {
-        Some(posed) if format.holds_scene() => Some(
+        Some(posed) if scene_body => Some(
             (0..posed.len())
                 .filter_map(|t| posed.mesh(t))
                 .map(|m| {

@@ -155,6 +155,17 @@ impl<'a> Layout<'a> {
         self.views.len() - 1
     }
 
+    /// An accessor of `count` elements of `kind` (`SCALAR`, `VEC3`, …) and
+    /// `component` type over the whole of `view`.
+    fn plain_accessor(&mut self, view: usize, component: u32, count: usize, kind: &str) -> usize {
+        self.accessor(json!({
+            "bufferView": view,
+            "componentType": component,
+            "count": count,
+            "type": kind,
+        }))
+    }
+
     fn accessor(&mut self, a: Value) -> usize {
         self.accessors.push(a);
         self.accessors.len() - 1
@@ -422,12 +433,7 @@ fn mesh_data<'a>(
         let view = l.view(n * 8, Some(ARRAY_BUFFER), None, move |w| {
             write_le(w, texcoords.as_flattened())
         });
-        attributes["TEXCOORD_0"] = json!(l.accessor(json!({
-            "bufferView": view,
-            "componentType": FLOAT,
-            "count": n,
-            "type": "VEC2",
-        })));
+        attributes["TEXCOORD_0"] = json!(l.plain_accessor(view, FLOAT, n, "VEC2"));
     }
     if t < 2 {
         return Ok((attributes, Vec::new()));
@@ -502,12 +508,7 @@ fn index_accessor<'a>(
         }
         Ok(())
     });
-    Ok(l.accessor(json!({
-        "bufferView": view,
-        "componentType": UNSIGNED_INT,
-        "count": count,
-        "type": "SCALAR",
-    })))
+    Ok(l.plain_accessor(view, UNSIGNED_INT, count, "SCALAR"))
 }
 
 /// The sampler times, the one-hot morph weights with one channel per morph-animated
@@ -548,12 +549,7 @@ fn animation(
             }
             Ok(())
         });
-        Some(l.accessor(json!({
-            "bufferView": output_view,
-            "componentType": FLOAT,
-            "count": t * t,
-            "type": "SCALAR",
-        })))
+        Some(l.plain_accessor(output_view, FLOAT, t * t, "SCALAR"))
     };
     let mut samplers = Vec::new();
     let mut channels = Vec::new();

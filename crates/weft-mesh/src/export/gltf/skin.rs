@@ -18,7 +18,8 @@ use std::path::Path;
 use serde_json::{json, Value};
 
 use super::{
-    write_le, write_vec3s, AnimatedMesh, Document, ExportError, GlbOptions, Layout, SeamSplit,
+    vec3_accessor, write_le, write_vec3s, AnimatedMesh, Document, ExportError, GlbOptions, Layout,
+    SeamSplit,
 };
 use super::{ARRAY_BUFFER, FLOAT};
 use crate::io::write_atomic;
@@ -217,12 +218,7 @@ impl Skeleton<'_> {
         let view = l.view(j * 64, None, None, move |w| {
             write_le(w, matrices.as_flattened())
         });
-        let matrices = l.accessor(json!({
-            "bufferView": view,
-            "componentType": FLOAT,
-            "count": j,
-            "type": "MAT4",
-        }));
+        let matrices = l.plain_accessor(view, FLOAT, j, "MAT4");
         json!({
             "name": "skeleton",
             "inverseBindMatrices": matrices,
@@ -245,24 +241,14 @@ impl Skeleton<'_> {
             let view = l.view(t * 16, None, None, move |w| {
                 write_le(w, quats.as_flattened())
             });
-            let output = l.accessor(json!({
-                "bufferView": view,
-                "componentType": FLOAT,
-                "count": t,
-                "type": "VEC4",
-            }));
+            let output = l.plain_accessor(view, FLOAT, t, "VEC4");
             out.push((output, first + k, "rotation"));
         }
         let root = self.root.to_vec();
         let view = l.view(t * 12, None, None, move |w| {
             write_vec3s(w, root.iter().copied())
         });
-        let output = l.accessor(json!({
-            "bufferView": view,
-            "componentType": FLOAT,
-            "count": t,
-            "type": "VEC3",
-        }));
+        let output = l.accessor(vec3_accessor(view, 0, t, None));
         out.push((output, first, "translation"));
         out
     }
@@ -310,19 +296,9 @@ pub(super) fn attributes<'a>(
     let view = l.view(n * 8, Some(ARRAY_BUFFER), None, move |w| {
         write_le(w, joints.as_flattened())
     });
-    attributes["JOINTS_0"] = json!(l.accessor(json!({
-        "bufferView": view,
-        "componentType": UNSIGNED_SHORT,
-        "count": n,
-        "type": "VEC4",
-    })));
+    attributes["JOINTS_0"] = json!(l.plain_accessor(view, UNSIGNED_SHORT, n, "VEC4"));
     let view = l.view(n * 16, Some(ARRAY_BUFFER), None, move |w| {
         write_le(w, weights.as_flattened())
     });
-    attributes["WEIGHTS_0"] = json!(l.accessor(json!({
-        "bufferView": view,
-        "componentType": FLOAT,
-        "count": n,
-        "type": "VEC4",
-    })));
+    attributes["WEIGHTS_0"] = json!(l.plain_accessor(view, FLOAT, n, "VEC4"));
 }
