@@ -33,6 +33,18 @@ pub enum NnError {
     /// outside (0, 1], ...).
     #[error("invalid configuration: {0}")]
     Config(String),
+    /// A host value that must be finite (a feature, a statistic) was NaN or infinite.
+    #[error("{what}: row {row}, column {column} is not finite ({value})")]
+    NonFinite {
+        /// The matrix, named as the function documents it.
+        what: &'static str,
+        /// Row of the value.
+        row: usize,
+        /// Column of the value.
+        column: usize,
+        /// The value.
+        value: f32,
+    },
     /// A batch needs at least one graph.
     #[error("a graph batch needs at least one graph")]
     EmptyBatch,

@@ -2,6 +2,8 @@
 //!
 //! - [`gat`]: graph attention on CSR adjacency — the fused CPU kernel with its hand-written
 //!   backward, the generic reference path, and the [`GatBlock`] layer.
+//! - [`dense`]: GAT block → batch norm → σ ([`NormedGat`]) and the densely connected
+//!   modules of seed 001 ([`DenseGatModule`], eq. 3.6).
 //! - [`adjacency`]: the destination-major adjacency (self-loops, transpose) GAT runs on.
 //! - [`backend`]: the devices (flex CPU by default; wgpu / cuda behind features).
 //! - [`activation`]: the nonlinearities the papers name.
@@ -10,6 +12,8 @@
 //!   TopKPool, SAGPool, ASAP with unpooling by index.
 //! - [`batch`]: several garments as one disjoint graph ([`GraphBatch`], [`HierarchyBatch`]).
 //! - [`sparse`]: constant sparse × dense products with their transpose backward.
+//! - [`normalizer`]: per-column z-score of node features, fitted on training rows.
+//! - [`patch`]: breadth-first connected vertex patches with their induced subgraph.
 //! - [`optim`]: Adamax and cosine annealing.
 //! - [`init`]: Glorot for GAT blocks, Kaiming for linear and LSTM layers.
 
@@ -17,13 +21,16 @@ pub mod activation;
 pub mod adjacency;
 pub mod backend;
 pub mod batch;
+pub mod dense;
 pub mod error;
 mod flex;
 pub mod gat;
 pub mod init;
 pub mod lstm;
 pub mod mlp;
+pub mod normalizer;
 pub mod optim;
+pub mod patch;
 pub mod pool;
 mod real;
 pub mod sparse;
@@ -33,11 +40,14 @@ mod testutil;
 pub use activation::Activation;
 pub use adjacency::Adjacency;
 pub use batch::{BatchLevel, GraphBatch, HierarchyBatch};
+pub use dense::{DenseGatModule, DenseGatModuleConfig, NormedGat, NormedGatConfig};
 pub use error::{NnError, Result};
 pub use gat::{AttentionImpl, GatBlock, GatBlockConfig, HeadMerge};
 pub use lstm::{LstmEncoder, LstmEncoderConfig};
 pub use mlp::{Mlp, MlpConfig};
+pub use normalizer::{FeatureNormalizer, NormalizerFit};
 pub use optim::{cosine_annealing, Adamax, AdamaxConfig};
+pub use patch::Patch;
 pub use sparse::{sparse_matmul, SparseImpl, SparseMatrix};
 
 pub use burn;
