@@ -15,8 +15,8 @@ use weft_sim::{ElasticSkin, ElasticSkinParams};
 
 const LEFT_SHOULDER: usize = 16;
 const LEFT_ELBOW: usize = 18;
-/// Arm bones drawn: left collar, shoulder (upper arm), elbow (forearm), wrist, hand.
-const ARM: [usize; 5] = [13, 16, 18, 20, 22];
+/// Arm bones drawn: the left shoulder's (upper arm) and elbow's (forearm).
+const ARM: [usize; 2] = [LEFT_SHOULDER, LEFT_ELBOW];
 /// Faces within this distance of the rest elbow joint make the measured arm section, m.
 const SECTION_RADIUS: f64 = 0.12;
 
@@ -27,7 +27,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let shaped = model.shaped(&[])?;
     let (rest, faces, weights) = (&shaped.vertices, model.faces(), model.weights());
     let t0 = Instant::now();
-    let skin = ElasticSkin::new(rest, faces, weights, &ElasticSkinParams::default())?;
+    let params = ElasticSkinParams::default();
+    let skin = ElasticSkin::new(rest, faces, weights, &params)?;
     println!(
         "setup {:.2} s, {} vertices, {} solved",
         t0.elapsed().as_secs_f64(),
@@ -93,7 +94,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "{name}: solve {secs:.2} s, {} Newton iterations, {} CG, converged {}",
             report.newton.iterations, report.newton.cg_iterations, report.newton.converged
         );
-        // Side by side along +X, 0.7 m apart.
+        // Side by side along +X, a tenth of the arm's length apart.
+        let xs = arm.iter().flatten().map(|&v| results[0].1[v as usize][0]);
+        let (lo, hi) = xs.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+        let step = 1.1 * (hi - lo);
         let mut shifted = Vec::new();
         for (k, (method, x)) in results.iter().enumerate() {
             let ratio = cone_volume_sum(x, &section, center) / rest_volume;
@@ -101,7 +105,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             title.push_str(&format!("  {method} {ratio:.3}"));
             shifted.push(
                 x.iter()
-                    .map(|p| [p[0] + 0.7 * k as f64, p[1], p[2]])
+                    .map(|p| [p[0] + step * k as f64, p[1], p[2]])
                     .collect::<Vec<_>>(),
             );
         }
