@@ -238,6 +238,19 @@ proptest! {
     }
 
     #[test]
+    fn cone_volume_derivatives(seed in any::<u64>()) {
+        // Apexes anywhere round the grid (on either side of a face), rest volumes from
+        // the rest shape, stiffnesses over two orders of magnitude.
+        let mut rng = Rng::new(seed);
+        let rest = rest_mesh(&mut rng);
+        let x = perturbed(&rest.positions, &mut rng, 0.2);
+        let apex: Vec<[f64; 3]> = (0..rest.face_count()).map(|_| rng.vec3(0.6)).collect();
+        let k: Vec<f64> = (0..rest.face_count()).map(|_| rng.uniform(1e2, 1e4)).collect();
+        let e = ConeVolume::new(&rest.positions, rest.faces.clone(), k, apex).unwrap();
+        check(&e, &x, false);
+    }
+
+    #[test]
     fn gravity_and_inertia_derivatives(seed in any::<u64>()) {
         let mut rng = Rng::new(seed);
         let rest = rest_mesh(&mut rng);
