@@ -7,7 +7,8 @@
 //! - [`activation`]: the nonlinearities the papers name.
 //! - [`mlp`], [`lstm`]: MLP (with optional batch norm) and stacked LSTM encoders.
 //! - [`pool`]: structure-preserving pooling/unpooling (seed 000) and the learned baselines
-//!   TopKPool, SAGPool, ASAP with unpooling by index.
+//!   TopKPool, SAGPool, ASAP with unpooling by index, and MultiResGNet's edge-contraction
+//!   pooling ([`EdgePool`]).
 //! - [`batch`]: several garments as one disjoint graph ([`GraphBatch`], [`HierarchyBatch`]).
 //! - [`sparse`]: constant sparse × dense products with their transpose backward.
 //! - [`optim`]: Adamax and cosine annealing.
@@ -38,6 +39,7 @@ pub use gat::{AttentionImpl, GatBlock, GatBlockConfig, HeadMerge};
 pub use lstm::{LstmEncoder, LstmEncoderConfig};
 pub use mlp::{Mlp, MlpConfig};
 pub use optim::{cosine_annealing, Adamax, AdamaxConfig};
+pub use pool::{edge_unpool, EdgePool, EdgePoolConfig};
 pub use sparse::{sparse_matmul, SparseImpl, SparseMatrix};
 
 pub use burn;
