@@ -136,8 +136,9 @@ impl EdgePool {
         self.weight.shape().dims::<2>()[0]
     }
 
-    /// The scores `α_ij` `[entries, 1]` of the directed edges of `batch` without
-    /// self-loops, in the order of `adjacency` (returned alongside).
+    /// The scores `α_ij` `[entries, 1]` of the directed edges `j → i` of `batch`: softmax
+    /// over `N(i)` without `i`, rows in the CSR order of the self-loop-free adjacency
+    /// returned alongside ([`attention_coefficients`]). Errors as [`EdgePool::forward`].
     pub fn edge_scores(
         &self,
         x: Tensor<2>,
@@ -172,8 +173,10 @@ impl EdgePool {
             .try_into_vec::<f64>()
             .unwrap_or_default();
         let partner = greedy_matching(&host, &adjacency);
+        let entries = alpha.dims()[0];
 
-        // Clusters by smallest member; `edge[c]` is the contracted entry, or none.
+        // Clusters by smallest member; `edge[c]` is the contracted entry, or the padding
+        // row `entries` for a singleton.
         let n = batch.node_count();
         let mut assignment = vec![u32::MAX; n];
         let mut members = Vec::with_capacity(n / 2 + 1);
@@ -192,7 +195,7 @@ impl EdgePool {
                 }
                 None => {
                     members.push((v as u32, None));
-                    edge.push(host.len() as u32);
+                    edge.push(entries as u32);
                 }
             }
         }
