@@ -9,7 +9,8 @@
 //! - [`activation`]: the nonlinearities the papers name.
 //! - [`mlp`], [`lstm`]: MLP (with optional batch norm) and stacked LSTM encoders.
 //! - [`pool`]: structure-preserving pooling/unpooling (seed 000) and the learned baselines
-//!   TopKPool, SAGPool, ASAP with unpooling by index.
+//!   TopKPool, SAGPool, ASAP with unpooling by index, and MultiResGNet's edge-contraction
+//!   pooling ([`EdgePool`]).
 //! - [`batch`]: several garments as one disjoint graph ([`GraphBatch`], [`HierarchyBatch`]).
 //! - [`sparse`]: constant sparse × dense products with their transpose backward.
 //! - [`normalizer`]: per-column z-score of node features, fitted on training rows.
@@ -48,6 +49,7 @@ pub use mlp::{Mlp, MlpConfig};
 pub use normalizer::{FeatureNormalizer, NormalizerFit};
 pub use optim::{cosine_annealing, Adamax, AdamaxConfig};
 pub use patch::Patch;
+pub use pool::{edge_unpool, EdgePool, EdgePoolConfig};
 pub use sparse::{sparse_matmul, SparseImpl, SparseMatrix};
 
 pub use burn;

@@ -5,6 +5,8 @@
 //!   on `z = W h`. On the flex CPU backend it runs the fused kernel ([`kernel`], [`fused`])
 //!   with its hand-written backward ([`backward`]); on other backends, or on request, the
 //!   generic tensor path ([`reference`]).
+//! - [`attention_coefficients`]: the softmax weights α alone, per edge (edge pooling's
+//!   scores).
 //! - [`GatBlock`]: the layer (linear transform, attention, heads concatenated or averaged,
 //!   activation, the self-reinforced stream of seed 001).
 
@@ -55,22 +57,7 @@ pub fn attention(
     negative_slope: f64,
     implementation: AttentionImpl,
 ) -> Result<Tensor<2>> {
-    let [heads, channels] = a_src.dims();
-    if heads == 0 || channels == 0 {
-        return Err(NnError::Config(format!(
-            "attention needs at least one head and one channel, got {heads}×{channels}"
-        )));
-    }
-    check_shape("a_dst", &[heads, channels], &a_dst.dims())?;
-    check_shape("z", &[ANY, heads * channels], &z.dims())?;
-    let n = z.dims()[0];
-    if n != adjacency.node_count() {
-        return Err(NnError::NodeCount {
-            what: "GAT attention",
-            graph: adjacency.node_count(),
-            features: n,
-        });
-    }
+    let heads = check_inputs(&z, &a_src, &a_dst, adjacency)?;
     let dtype = z.dtype();
     let (a_src, a_dst) = (a_src.cast(dtype), a_dst.cast(dtype));
     let fused_dtype = matches!(dtype, DType::F32 | DType::F64);
@@ -94,6 +81,61 @@ pub fn attention(
             negative_slope,
         ))
     }
+}
+
+/// The attention coefficients `α_ij` of eq. 3.4 themselves, `[entries, H]`.
+///
+/// Row `e` is the edge `j → i` with `j = adjacency.sources()[e]` and
+/// `i = adjacency.targets()[e]`: the adjacency's CSR order, destination-major (all edges
+/// into node 0, then node 1, ...) with ascending sources, so the coefficients of node `i`'s
+/// softmax are the rows `adjacency.offsets()[i]..adjacency.offsets()[i + 1]` and sum to 1.
+/// Arguments as [`attention`]. Always the generic tensor path: the fused kernel never
+/// materialises α, and callers that need it (edge pooling's scores) need its autodiff.
+pub fn attention_coefficients(
+    z: Tensor<2>,
+    a_src: Tensor<2>,
+    a_dst: Tensor<2>,
+    adjacency: &Adjacency,
+    negative_slope: f64,
+) -> Result<Tensor<2>> {
+    check_inputs(&z, &a_src, &a_dst, adjacency)?;
+    let dtype = z.dtype();
+    let (sources, targets) = adjacency.index_tensors(&z.device());
+    Ok(reference::coefficients(
+        z,
+        a_src.cast(dtype),
+        a_dst.cast(dtype),
+        sources,
+        targets,
+        negative_slope,
+    ))
+}
+
+/// Checks the shapes of an attention call against each other and the adjacency; returns
+/// the head count.
+fn check_inputs(
+    z: &Tensor<2>,
+    a_src: &Tensor<2>,
+    a_dst: &Tensor<2>,
+    adjacency: &Adjacency,
+) -> Result<usize> {
+    let [heads, channels] = a_src.dims();
+    if heads == 0 || channels == 0 {
+        return Err(NnError::Config(format!(
+            "attention needs at least one head and one channel, got {heads}×{channels}"
+        )));
+    }
+    check_shape("a_dst", &[heads, channels], &a_dst.dims())?;
+    check_shape("z", &[ANY, heads * channels], &z.dims())?;
+    let n = z.dims()[0];
+    if n != adjacency.node_count() {
+        return Err(NnError::NodeCount {
+            what: "GAT attention",
+            graph: adjacency.node_count(),
+            features: n,
+        });
+    }
+    Ok(heads)
 }
 
 #[cfg(test)]

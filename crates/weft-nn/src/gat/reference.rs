@@ -24,6 +24,38 @@ pub fn attention(
     let [n, width] = z.dims();
     let [heads, channels] = a_src.dims();
     let entries = sources.dims()[0];
+    let (device, dtype) = (z.device(), z.dtype());
+    let alpha = coefficients(
+        z.clone(),
+        a_src,
+        a_dst,
+        sources.clone(),
+        targets.clone(),
+        negative_slope,
+    );
+    let messages = (z.select(0, sources).reshape([entries * heads, channels])
+        * alpha.reshape([entries * heads, 1]))
+    .reshape([entries, width]);
+    Tensor::<2>::zeros([n, width], (&device, dtype)).select_assign(
+        0,
+        targets,
+        messages,
+        IndexingUpdateOp::Add,
+    )
+}
+
+/// The attention coefficients `α` `[entries, H]` of the edges `sources[e] → targets[e]`:
+/// the softmax over each destination's entries. Same arguments as [`attention`].
+pub fn coefficients(
+    z: Tensor<2>,
+    a_src: Tensor<2>,
+    a_dst: Tensor<2>,
+    sources: Tensor<1, Int>,
+    targets: Tensor<1, Int>,
+    negative_slope: f64,
+) -> Tensor<2> {
+    let [n, width] = z.dims();
+    let [heads, channels] = a_src.dims();
     // Per-node scores s = z·a per head: [N, H].
     let score = |a: Tensor<2>| {
         (z.clone() * a.reshape([1, width]))
@@ -34,7 +66,7 @@ pub fn attention(
     let s_dst = score(a_dst);
     let s_src = score(a_src);
     let logits = leaky_relu(
-        s_dst.select(0, targets.clone()) + s_src.select(0, sources.clone()),
+        s_dst.select(0, targets.clone()) + s_src.select(0, sources),
         negative_slope,
     );
     let device = z.device();
@@ -52,14 +84,5 @@ pub fn attention(
         weights.clone(),
         IndexingUpdateOp::Add,
     );
-    let alpha = weights / total.select(0, targets.clone());
-    let messages = (z.select(0, sources).reshape([entries * heads, channels])
-        * alpha.reshape([entries * heads, 1]))
-    .reshape([entries, width]);
-    Tensor::<2>::zeros([n, width], (&device, dtype)).select_assign(
-        0,
-        targets,
-        messages,
-        IndexingUpdateOp::Add,
-    )
+    weights / total.select(0, targets)
 }

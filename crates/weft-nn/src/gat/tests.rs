@@ -205,3 +205,75 @@ fn seeded_initialisation_is_deterministic() {
     assert_eq!(weights(42), weights(42));
     assert_ne!(weights(42), weights(43));
 }
+
+#[test]
+fn attention_coefficients_are_softmax_rows_that_reproduce_attention() {
+    let mut rng = Rng::new(13);
+    let graph = random_graph(&mut rng, 40, 30);
+    let (heads, channels) = (2, 3);
+    let with_self = Adjacency::from_graph(&graph);
+    let without_self = Adjacency::from_csr(40, graph.offsets(), graph.adjacency(), false).unwrap();
+    for adjacency in [with_self, without_self] {
+        let c = case(&mut rng, adjacency, heads, channels);
+        let device = cpu_autodiff();
+        let (n, w) = (c.adjacency.node_count(), heads * channels);
+        let z = tensor(c.z.clone(), [n, w], &device, DType::F64).require_grad();
+        let a_src = tensor(c.a_src.clone(), [heads, channels], &device, DType::F64);
+        let a_dst = tensor(c.a_dst.clone(), [heads, channels], &device, DType::F64);
+        let alpha = attention_coefficients(
+            z.clone(),
+            a_src,
+            a_dst,
+            &c.adjacency,
+            DEFAULT_NEGATIVE_SLOPE,
+        )
+        .unwrap();
+        assert_eq!(alpha.dims(), [c.adjacency.entry_count(), heads]);
+        let al = host(&alpha);
+        // Rows offsets[i]..offsets[i + 1] are node i's softmax.
+        for i in 0..n {
+            for k in 0..heads {
+                let range = c.adjacency.offsets()[i]..c.adjacency.offsets()[i + 1];
+                let total: f64 = range.map(|e| al[e * heads + k]).sum();
+                assert!((total - 1.0).abs() < 1e-12, "node {i} head {k}: {total}");
+            }
+        }
+        // Σ_j α_ij z_j per head is what `attention` computes, and so is its gradient.
+        let (sources, targets) = (c.adjacency.sources(), c.adjacency.targets());
+        let mut aggregated = vec![0.0; n * w];
+        for e in 0..sources.len() {
+            let (j, i) = (sources[e] as usize, targets[e] as usize);
+            for k in 0..heads {
+                for f in 0..channels {
+                    let col = k * channels + f;
+                    aggregated[i * w + col] += al[e * heads + k] * c.z[j * w + col];
+                }
+            }
+        }
+        let [out, gz, _, _] = run(&c, AttentionImpl::Auto, DType::F64);
+        assert!(max_diff(&aggregated, &out) < 1e-12);
+        let r = tensor(c.r.clone(), [n, w], &device, DType::F64);
+        let entries = sources.len();
+        let messages = (z
+            .clone()
+            .select(0, c.adjacency.index_tensors(&device).0)
+            .reshape([entries * heads, channels])
+            * alpha.reshape([entries * heads, 1]))
+        .reshape([entries, w]);
+        let out = Tensor::<2>::zeros([n, w], (&device, DType::F64)).select_assign(
+            0,
+            c.adjacency.index_tensors(&device).1,
+            messages,
+            burn::tensor::IndexingUpdateOp::Add,
+        );
+        let grads = (out * r).sum().backward();
+        assert!(max_diff(&host(&z.grad(&grads).unwrap()), &gz) < 1e-12);
+    }
+    let z = Tensor::<2>::zeros([39, 6], &cpu());
+    let att = Tensor::<2>::zeros([2, 3], &cpu());
+    let adjacency = Adjacency::from_graph(&graph);
+    assert!(matches!(
+        attention_coefficients(z, att.clone(), att, &adjacency, 0.2),
+        Err(NnError::NodeCount { .. })
+    ));
+}

@@ -8,8 +8,11 @@
 //!   ([`unpool_by_index`]: the pooled rows go back to where they came from, zeros elsewhere,
 //!   as in Graph U-Nets):
 //!   [`topk`] (Gao & Ji 2019), [`sag`] (Lee et al. 2019), [`asap`] (Ranjan et al. 2020).
+//! - [`edge`]: edge-contraction pooling and its unpooling (seed 001 eq. 3.10–3.12,
+//!   MultiResGNet's global branch; Diehl's EdgePool).
 
 pub mod asap;
+pub mod edge;
 pub mod sag;
 pub mod structure;
 pub mod topk;
@@ -22,6 +25,7 @@ use crate::batch::GraphBatch;
 use crate::error::{check_shape, NnError, Result, ANY};
 
 pub use asap::{AsapPool, AsapPoolConfig};
+pub use edge::{edge_unpool, Clusters, EdgePool, EdgePoolConfig, EdgePooled};
 pub use sag::{SagPool, SagPoolConfig};
 pub use structure::{StructurePool, StructureUnpool};
 pub use topk::{TopKPool, TopKPoolConfig};
