@@ -86,6 +86,35 @@ impl SkinWeights {
             .unwrap_or(0)
     }
 
+    /// At most `k` influences per vertex: the `k` largest weights of each vertex (ties
+    /// to the lower joint), renormalised to sum to one. Seed 001 skins its coarse mesh
+    /// with at most eight (DenseGATs) or four (MultiResGNet) influences, as game engines
+    /// do; `k = 0` is taken as 1.
+    pub fn truncated(&self, k: usize) -> SkinWeights {
+        let k = k.max(1);
+        let mut offsets = vec![0];
+        let mut joints = Vec::with_capacity(self.joints.len());
+        let mut weights = Vec::with_capacity(self.weights.len());
+        for v in 0..self.vertex_count() {
+            let mut row: Vec<(usize, f64)> = self.influences(v).collect();
+            row.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            row.truncate(k);
+            row.sort_by_key(|&(j, _)| j);
+            let sum: f64 = row.iter().map(|&(_, w)| w).sum();
+            for (j, w) in row {
+                joints.push(j as u32);
+                weights.push(if sum > 0.0 { w / sum } else { w });
+            }
+            offsets.push(joints.len());
+        }
+        SkinWeights {
+            offsets,
+            joints,
+            weights,
+            joint_count: self.joint_count,
+        }
+    }
+
     /// The dense row-major `V × J` matrix.
     pub fn to_dense(&self) -> Vec<f64> {
         let mut out = vec![0.0; self.vertex_count() * self.joint_count];
@@ -268,6 +297,22 @@ mod tests {
             dense.extend([1.0 - w1, w1]);
         }
         (s, j, rest, SkinWeights::from_dense(&dense, 2))
+    }
+
+    #[test]
+    fn truncation_keeps_the_largest_influences_renormalised() {
+        let w = SkinWeights::from_dense(&[0.1, 0.5, 0.0, 0.4, 0.25, 0.25, 0.25, 0.25], 4);
+        let t = w.truncated(2);
+        assert_eq!(t.max_influences(), 2);
+        let row0: Vec<(usize, f64)> = t.influences(0).collect();
+        assert_eq!(row0.len(), 2);
+        assert_eq!((row0[0].0, row0[1].0), (1, 3));
+        assert!((row0[0].1 - 5.0 / 9.0).abs() < 1e-12 && (row0[1].1 - 4.0 / 9.0).abs() < 1e-12);
+        // Ties go to the lower joint.
+        let row1: Vec<usize> = t.influences(1).map(|(j, _)| j).collect();
+        assert_eq!(row1, vec![0, 1]);
+        // k at or above the influence count changes nothing.
+        assert_eq!(w.truncated(4), w);
     }
 
     #[test]

@@ -10,9 +10,12 @@
 //! * [`manifest`] and [`shard`]: the files on disk.
 //! * [`Dataset`]: the loader the training code uses.
 //! * [`info`]: the summary of `weft data info`.
+//! * [`characters`]: seed 001's case-1 datasets (dressed characters, poses and a
+//!   ground-truth deformation of each), built by `weft data characters`.
 //!
 //! See docs/datasets.md for the layout, the presets and how cluster jobs merge.
 
+pub mod characters;
 pub mod config;
 pub mod dataset;
 pub mod error;
@@ -24,6 +27,7 @@ pub mod plan;
 pub mod progress;
 pub mod shard;
 pub mod split;
+mod tensors;
 
 pub use config::{DataConfig, GarmentSpec, MotionSpec, SplitConfig};
 pub use dataset::{Dataset, Sequence};

@@ -45,7 +45,7 @@ fn normal(r: &mut SplitMix64) -> f64 {
 /// A normal draw with standard deviation `sigma`, redrawn until within ±`limit` (a
 /// truncated normal: clamping instead would pile shapes up on the limits, and two
 /// splits could then share one).
-fn truncated_normal(r: &mut SplitMix64, sigma: f64, limit: f64) -> f64 {
+pub(crate) fn truncated_normal(r: &mut SplitMix64, sigma: f64, limit: f64) -> f64 {
     for _ in 0..10_000 {
         let x = sigma * normal(r);
         if x.abs() <= limit {

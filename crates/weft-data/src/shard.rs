@@ -26,14 +26,14 @@
 //! raw arrays (no pickle, no code), and a half-written file fails the header's length
 //! check, which is what resuming relies on.
 
-use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::Path;
 
-use safetensors::tensor::{Dtype, SafeTensors, View};
+use safetensors::tensor::Dtype;
 use sha2::{Digest, Sha256};
 
 use crate::error::DataError;
+use crate::tensors::{f32_tensor, f32s, faces as read_faces, parse, tensor, triples, u32_tensor};
 
 /// SMPL pose values per frame (24 joints × 3).
 pub const POSE_VALUES: usize = 72;
@@ -82,36 +82,6 @@ impl ShardData {
     }
 }
 
-/// A tensor to write: dtype, shape and little-endian bytes.
-struct Tensor {
-    dtype: Dtype,
-    shape: Vec<usize>,
-    bytes: Vec<u8>,
-}
-
-impl View for &Tensor {
-    fn dtype(&self) -> Dtype {
-        self.dtype
-    }
-    fn shape(&self) -> &[usize] {
-        &self.shape
-    }
-    fn data(&self) -> Cow<'_, [u8]> {
-        Cow::Borrowed(&self.bytes)
-    }
-    fn data_len(&self) -> usize {
-        self.bytes.len()
-    }
-}
-
-fn f32_tensor<'a>(shape: Vec<usize>, values: impl Iterator<Item = &'a f32>) -> Tensor {
-    Tensor {
-        dtype: Dtype::F32,
-        shape,
-        bytes: values.flat_map(|x| x.to_le_bytes()).collect(),
-    }
-}
-
 /// The shard's bytes.
 pub fn encode(sequence_id: &str, data: &ShardData) -> Result<Vec<u8>, DataError> {
     let s = data.shape();
@@ -156,19 +126,7 @@ pub fn encode(sequence_id: &str, data: &ShardData) -> Result<Vec<u8>, DataError>
             "rest_positions",
             f32_tensor(vec![n, 3], data.rest_positions.iter().flatten()),
         ),
-        (
-            "faces",
-            Tensor {
-                dtype: Dtype::U32,
-                shape: vec![f, 3],
-                bytes: data
-                    .faces
-                    .iter()
-                    .flatten()
-                    .flat_map(|x| x.to_le_bytes())
-                    .collect(),
-            },
-        ),
+        ("faces", u32_tensor(vec![f, 3], data.faces.iter().flatten())),
         (
             "corner_uvs",
             f32_tensor(vec![f, 3, 2], data.corner_uvs.iter().flatten().flatten()),
@@ -258,13 +216,6 @@ fn check_digest(path: &Path, bytes: &[u8], expected: Option<&str>) -> Result<Str
     }
 }
 
-fn parse<'a>(path: &Path, bytes: &'a [u8]) -> Result<SafeTensors<'a>, DataError> {
-    SafeTensors::deserialize(bytes).map_err(|e| DataError::Shard {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })
-}
-
 fn layout(e: ShardShape) -> [(&'static str, Dtype, Vec<usize>); 7] {
     let (t, n, f) = (e.frames, e.vertices, e.faces);
     [
@@ -276,42 +227,6 @@ fn layout(e: ShardShape) -> [(&'static str, Dtype, Vec<usize>); 7] {
         ("faces", Dtype::U32, vec![f, 3]),
         ("corner_uvs", Dtype::F32, vec![f, 3, 2]),
     ]
-}
-
-fn describe(dtype: Dtype, shape: &[usize]) -> String {
-    format!("{} {shape:?}", format!("{dtype:?}").to_lowercase())
-}
-
-/// The bytes of tensor `name`, after checking its dtype and shape.
-fn tensor<'a>(
-    path: &Path,
-    st: &SafeTensors<'a>,
-    name: &str,
-    dtype: Dtype,
-    shape: &[usize],
-) -> Result<&'a [u8], DataError> {
-    let err = |found: String| DataError::Tensor {
-        path: path.to_path_buf(),
-        tensor: name.to_string(),
-        expected: describe(dtype, shape),
-        found,
-    };
-    let view = st.tensor(name).map_err(|_| err("missing".into()))?;
-    if view.dtype() != dtype || view.shape() != shape {
-        return Err(err(describe(view.dtype(), view.shape())));
-    }
-    Ok(view.data())
-}
-
-fn f32s(bytes: &[u8]) -> impl Iterator<Item = f32> + '_ {
-    bytes
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-}
-
-fn triples(bytes: &[u8]) -> Vec<[f32; 3]> {
-    let v: Vec<f32> = f32s(bytes).collect();
-    v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
 }
 
 /// Decodes shard bytes (see [`read`]).
@@ -339,26 +254,7 @@ pub fn decode(path: &Path, bytes: &[u8], expected: ShardShape) -> Result<ShardDa
         .chunks_exact(POSE_VALUES)
         .map(|c| std::array::from_fn(|j| [c[3 * j], c[3 * j + 1], c[3 * j + 2]]))
         .collect();
-    let face_values: Vec<u32> = faces_b
-        .chunks_exact(4)
-        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect();
-    let faces: Vec<[u32; 3]> = face_values
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]])
-        .collect();
-    if let Some((i, f)) = faces
-        .iter()
-        .enumerate()
-        .find(|(_, f)| f.iter().any(|&v| v as usize >= n))
-    {
-        return Err(DataError::Tensor {
-            path: path.to_path_buf(),
-            tensor: "faces".into(),
-            expected: format!("vertex indices below {n}"),
-            found: format!("face {i} = {f:?}"),
-        });
-    }
+    let faces = read_faces(path, "faces", faces_b, n)?;
     let uv_values: Vec<f32> = f32s(uvs_b).collect();
     let corner_uvs = uv_values
         .chunks_exact(6)

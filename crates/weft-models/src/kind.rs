@@ -44,10 +44,10 @@ impl ModelKind {
         }
     }
 
-    /// Whether this build can train and run the kind (only Multilevel today); callers
-    /// refuse the others with a clear message instead of stubbing them.
+    /// Whether this build can train and run the kind; callers refuse the others with a
+    /// clear message instead of stubbing them.
     pub fn is_implemented(self) -> bool {
-        matches!(self, ModelKind::Multilevel)
+        matches!(self, ModelKind::Multilevel | ModelKind::DenseGats)
     }
 }
 

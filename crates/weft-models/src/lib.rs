@@ -3,6 +3,8 @@
 //! - [`deformer`]: [`Deformer`] and [`Clip`], what every system implements and every
 //!   consumer (evaluation, `weft animate`, the demo) calls;
 //! - [`baseline`]: the no-learning LBS and DQS baselines;
+//! - [`refine`]: seed 001's learned refinement of skinning (case 1: dressed characters),
+//!   shared by [`densegats`] (DenseGATs, §3.2);
 //! - [`multilevel`]: the Multilevel model of seed 000 (multi-source garment graph,
 //!   structure-preserving pooling, temporal skinning weights and blend shapes, LBS);
 //! - [`kind`]: [`ModelKind`], the systems by name;
@@ -10,10 +12,12 @@
 
 pub mod baseline;
 pub mod deformer;
+pub mod densegats;
 pub mod error;
 pub mod kind;
 pub mod load;
 pub mod multilevel;
+pub mod refine;
 pub mod run;
 
 pub use baseline::{SkinningBaseline, DQS_NAME, LBS_NAME};

@@ -4,9 +4,15 @@
 
 use std::path::{Path, PathBuf};
 
+use weft_data::characters::CharacterSet;
+use weft_data::Split;
 use weft_models::multilevel::Multilevel;
+use weft_models::refine::{PositionFeature, RefineNet};
 use weft_models::ModelKind;
 use weft_nn::backend::{cpu_autodiff, seeded};
+use weft_train::run_config::{ModelSettings, RunConfig, TaskSettings};
+use weft_train::tasks::refine::config::{DenseGatsRun, RefineTraining};
+use weft_train::tasks::refine::{fit_normalizer, load_split, save_normalizer, RefineTask};
 use weft_train::{train, MultilevelRun, MultilevelTask, Outcome, RunOptions, TrainTask};
 
 use crate::error::{stage, PipelineError};
@@ -56,6 +62,7 @@ pub fn preset_toml(kind: ModelKind, preset: &str) -> Result<String, PipelineErro
     check_implemented(kind)?;
     match kind {
         ModelKind::Multilevel => Ok(MultilevelRun::preset(preset)?.to_toml()?),
+        ModelKind::DenseGats => Ok(DenseGatsRun::preset(preset)?.to_toml()?),
         _ => unreachable!("refused by check_implemented"),
     }
 }
@@ -73,21 +80,32 @@ pub fn train_run(spec: &TrainSpec, log: &mut dyn FnMut(&str)) -> Result<Outcome,
             };
             train_multilevel(&cfg, &spec.data, &spec.out, &options, log)
         }
+        ModelKind::DenseGats => {
+            let cfg: DenseGatsRun = resolve(spec)?;
+            train_refine(&cfg, cfg.model.position, cfg.model.influences, spec, log)
+        }
         _ => unreachable!("refused by check_implemented"),
     }
 }
 
-/// The Multilevel configuration of `spec`: a resumed run's own config.toml when nothing
-/// else is given, else the preset with the file and the flags laid over it.
+/// The Multilevel configuration of `spec` (see [`resolve`]).
 pub fn resolve_multilevel(spec: &TrainSpec) -> Result<MultilevelRun, PipelineError> {
+    resolve(spec)
+}
+
+/// The run configuration of `spec`: a resumed run's own config.toml when nothing else
+/// is given, else the preset with the file and the flags laid over it.
+pub fn resolve<M: ModelSettings, T: TaskSettings>(
+    spec: &TrainSpec,
+) -> Result<RunConfig<M, T>, PipelineError> {
     let explicit = spec.preset.is_some()
         || spec.config.is_some()
         || spec.steps.is_some()
         || spec.seed.is_some();
     let mut cfg = if spec.resume && !explicit {
-        MultilevelRun::from_run_dir(&spec.out)?
+        RunConfig::from_run_dir(&spec.out)?
     } else {
-        MultilevelRun::resolve(spec.preset.as_deref(), spec.config.as_deref())?
+        RunConfig::resolve(spec.preset.as_deref(), spec.config.as_deref())?
     };
     if let Some(steps) = spec.steps {
         cfg.train.trainer.steps = steps;
@@ -130,5 +148,83 @@ pub fn train_multilevel(
         out.display()
     ));
     let (_, outcome) = train(&mut task, model, &run, options)?;
+    Ok(outcome)
+}
+
+/// A refinement model's settings the pipeline needs besides [`ModelSettings`]: building
+/// the network.
+pub trait RefineModel: ModelSettings {
+    /// The network.
+    type Net: weft_nn::burn::module::Module + Clone + RefineNet;
+    /// Builds it on `device`.
+    fn build(&self, device: &weft_nn::burn::tensor::Device) -> Result<Self::Net, PipelineError>;
+}
+
+impl RefineModel for weft_models::densegats::DenseGatsConfig {
+    type Net = weft_models::densegats::DenseGats;
+    fn build(&self, device: &weft_nn::burn::tensor::Device) -> Result<Self::Net, PipelineError> {
+        Ok(self.init(device)?)
+    }
+}
+
+/// Trains a refinement model (DenseGATs, MultiResGNet) of `cfg` on the character
+/// dataset in `spec.data` into `spec.out`: loads the training and validation
+/// characters, fits the feature normaliser on the training ones (saved in the run
+/// directory before the first step), then runs the loop.
+pub fn train_refine<M: RefineModel>(
+    cfg: &RunConfig<M, RefineTraining>,
+    position: PositionFeature,
+    influences: usize,
+    spec: &TrainSpec,
+    log: &mut dyn FnMut(&str),
+) -> Result<Outcome, PipelineError> {
+    let set = CharacterSet::open(&spec.data).map_err(stage(&format!(
+        "opening the character dataset {}",
+        spec.data.display()
+    )))?;
+    let mut train_chars = load_split(&set, Split::Train, influences)
+        .map_err(stage("loading the training characters"))?;
+    if cfg.train.task.characters > 0 {
+        train_chars.truncate(cfg.train.task.characters);
+    }
+    let validation = load_split(&set, Split::Validation, influences)
+        .map_err(stage("loading the validation characters"))?;
+    let run = cfg.run_dir(&spec.out)?;
+    let normalizer_path = spec.out.join(weft_train::tasks::refine::NORMALIZER_FILE);
+    let normalizer = if spec.resume && normalizer_path.exists() {
+        weft_models::refine::read_normalizer(&normalizer_path)?
+    } else {
+        let n = fit_normalizer(&train_chars, position)
+            .map_err(stage("fitting the feature normaliser"))?;
+        save_normalizer(&spec.out, &n)?;
+        n
+    };
+    let device = seeded(&cpu_autodiff(), cfg.train.trainer.seed);
+    let characters = train_chars.len();
+    let mut task: RefineTask<M::Net> = RefineTask::new(
+        &cfg.train.task,
+        position,
+        train_chars,
+        validation,
+        normalizer,
+        cfg.train.trainer.seed,
+        &device,
+    )?;
+    let model = cfg.model.build(&device)?;
+    log(&format!(
+        "training {} ({} preset) on {characters} characters ({} patches of {} vertices per epoch), {} steps -> {}",
+        M::KIND,
+        cfg.preset,
+        task.item_count(),
+        cfg.train.task.patch,
+        cfg.train.trainer.steps,
+        spec.out.display()
+    ));
+    let options = RunOptions {
+        resume: spec.resume,
+        progress: spec.progress,
+        session_steps: None,
+    };
+    let (_, outcome) = train(&mut task, model, &run, &options)?;
     Ok(outcome)
 }

@@ -8,6 +8,7 @@
 //! - [`optim`]: the optimisers and learning-rate schedules a config can choose.
 //! - [`sampler`]: the seeded order of training items.
 //! - [`run`]: the run directory and checkpoints that resume bit for bit.
+//! - [`run_config`]: a run's configuration (preset, `[model]`, `[train]`), any model.
 //! - [`metrics`]: metrics.jsonl and curves.png.
 //! - [`loss`]: loss building blocks: supervised terms as burn tensor code, physics terms
 //!   as a custom autodiff operation over weft-sim's energies.
@@ -21,6 +22,7 @@ pub mod loss;
 pub mod metrics;
 pub mod optim;
 pub mod run;
+pub mod run_config;
 pub mod sampler;
 pub mod task;
 pub mod tasks;

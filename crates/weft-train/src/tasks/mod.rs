@@ -4,3 +4,4 @@
 //! metrics log are shared.
 
 pub mod multilevel;
+pub mod refine;

@@ -2,18 +2,14 @@
 //! Multilevel's own training settings (windows, loss weights, the two-step schedule),
 //! from a preset overlaid by a config file.
 
-use std::path::{Path, PathBuf};
-
 use serde::{Deserialize, Serialize};
 use weft_models::multilevel::MultilevelConfig;
-use weft_models::run::RunHeader;
 use weft_models::ModelKind;
 
 use super::schedule::ScheduleConfig;
 use super::terms::TermWeights;
-use crate::config::{TrainConfig, TrainTable};
 use crate::error::{Result, TrainError};
-use crate::run::RunDir;
+use crate::run_config::{ModelSettings, RunConfig, TaskSettings};
 
 /// Multilevel's training settings, in the `[train]` table beside the loop's.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -77,160 +73,30 @@ impl MultilevelTraining {
     }
 }
 
+impl TaskSettings for MultilevelTraining {
+    fn preset(name: &str) -> Result<Self> {
+        MultilevelTraining::preset(name)
+    }
+
+    fn validate(&self) -> Result<()> {
+        MultilevelTraining::validate(self)
+    }
+}
+
+impl ModelSettings for MultilevelConfig {
+    const KIND: ModelKind = ModelKind::Multilevel;
+
+    fn preset(name: &str) -> Result<Self> {
+        Ok(MultilevelConfig::preset(name)?)
+    }
+
+    fn check(&self) -> std::result::Result<(), String> {
+        self.validate().map_err(|e| e.to_string())
+    }
+}
+
 /// The configuration of a Multilevel run: preset name, model and training tables.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MultilevelRun {
-    /// The preset the run started from (`cpu` or `paper`).
-    pub preset: String,
-    /// The model (`[model]`).
-    pub model: MultilevelConfig,
-    /// The training (`[train]`: the loop's settings and the task's).
-    pub train: TrainTable<MultilevelTraining>,
-}
-
-impl MultilevelRun {
-    /// The preset `name` (model and training sides).
-    pub fn preset(name: &str) -> Result<Self> {
-        Ok(MultilevelRun {
-            preset: name.to_string(),
-            model: MultilevelConfig::preset(name)?,
-            train: TrainTable {
-                trainer: TrainConfig::preset(name)?,
-                task: MultilevelTraining::preset(name)?,
-            },
-        })
-    }
-
-    /// A preset with a config file's `[model]` and `[train]` fields laid over it. The
-    /// preset is `preset`, else the file's `preset`, else `cpu`. Unknown fields and
-    /// values out of range are errors naming the file and the field.
-    pub fn resolve(preset: Option<&str>, file: Option<&Path>) -> Result<Self> {
-        let table: Option<toml::Table> = match file {
-            Some(path) => {
-                let text = weft_mesh::io::read_input_to_string(path)
-                    .map_err(|e| TrainError::io(path, e))?;
-                Some(
-                    weft_config::parse_table(&text).map_err(|message| TrainError::Toml {
-                        path: path.to_path_buf(),
-                        message,
-                    })?,
-                )
-            }
-            None => None,
-        };
-        let from_file = table
-            .as_ref()
-            .and_then(|t| t.get("preset"))
-            .and_then(toml::Value::as_str)
-            .map(str::to_string);
-        let name = preset
-            .map(str::to_string)
-            .or_else(|| from_file.clone())
-            .unwrap_or_else(|| "cpu".to_string());
-        // An unknown preset names where it came from: the flag or the file's key.
-        let mut run = Self::preset(&name).map_err(|e| {
-            let origin = match (preset, file) {
-                (Some(_), _) | (None, None) => "--preset".to_string(),
-                (None, Some(path)) => format!("{}: preset", path.display()),
-            };
-            TrainError::Parse {
-                path: PathBuf::from(origin),
-                message: e.to_string(),
-            }
-        })?;
-        let Some(table) = table else {
-            return Ok(run);
-        };
-        let path = file.unwrap_or(Path::new("config"));
-        let origin = path.display().to_string();
-        weft_config::check_keys(
-            &table,
-            &["format_version", "model_kind", "preset", "model", "train"],
-            &origin,
-        )?;
-        if let Some(v) = table.get("model_kind") {
-            if v.as_str() != Some(ModelKind::Multilevel.name()) {
-                return Err(TrainError::Mismatch {
-                    path: path.to_path_buf(),
-                    field: "model_kind".into(),
-                    found: v.to_string(),
-                    expected: ModelKind::Multilevel.name().into(),
-                });
-            }
-        }
-        if let Some(v) = table.get("format_version") {
-            if v.as_integer() != Some(crate::run::FORMAT_VERSION) {
-                return Err(TrainError::Mismatch {
-                    path: path.to_path_buf(),
-                    field: "format_version".into(),
-                    found: v.to_string(),
-                    expected: crate::run::FORMAT_VERSION.to_string(),
-                });
-            }
-        }
-        let section = |name: &str| match table.get(name) {
-            None => Ok(None),
-            Some(toml::Value::Table(t)) => Ok(Some(t)),
-            Some(other) => Err(TrainError::Parse {
-                path: path.to_path_buf(),
-                message: format!(
-                    "`{name}` must be a table ([{name}]), found {}",
-                    other.type_str()
-                ),
-            }),
-        };
-        if let Some(m) = section("model")? {
-            run.model = weft_config::overlay(&run.model, m, &origin, "model")?;
-            run.model.validate().map_err(|e| TrainError::Parse {
-                path: path.to_path_buf(),
-                message: format!("[model]: {e}"),
-            })?;
-        }
-        if let Some(t) = section("train")? {
-            run.train = weft_config::overlay(&run.train, t, &origin, "train")?;
-        }
-        // Values out of range name the file they came from.
-        let in_file = |e: TrainError| TrainError::Parse {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        };
-        run.train.trainer.validate().map_err(in_file)?;
-        run.train.task.validate().map_err(in_file)?;
-        Ok(run)
-    }
-
-    /// The configuration of the run in `dir` (its config.toml).
-    pub fn from_run_dir(dir: &Path) -> Result<Self> {
-        let path = dir.join("config.toml");
-        if !path.exists() {
-            return Err(TrainError::RunDir {
-                path: dir.to_path_buf(),
-                message: "no config.toml: not a training run directory".into(),
-            });
-        }
-        Self::resolve(None, Some(&path))
-    }
-
-    /// The run directory `dir` for this configuration.
-    pub fn run_dir(&self, dir: &Path) -> Result<RunDir> {
-        RunDir::new(
-            dir,
-            ModelKind::Multilevel,
-            &self.preset,
-            &self.model,
-            &self.train,
-        )
-    }
-
-    /// The full configuration as config.toml text (every default written out).
-    pub fn to_toml(&self) -> Result<String> {
-        crate::run::config_text(
-            &RunHeader::new(ModelKind::Multilevel, &self.preset),
-            &crate::run::to_table("model config", &self.model)?,
-            &crate::run::to_table("train config", &self.train)?,
-        )
-    }
-}
+pub type MultilevelRun = RunConfig<MultilevelConfig, MultilevelTraining>;
 
 #[cfg(test)]
 mod tests {

@@ -1,0 +1,99 @@
+//! The configuration of a refinement run: the task's settings (`[train]` beside the
+//! loop's) and the run types of DenseGATs and MultiResGNet.
+
+use serde::{Deserialize, Serialize};
+use weft_models::densegats::DenseGatsConfig;
+use weft_models::ModelKind;
+
+use crate::config::TrainConfig;
+use crate::error::{Result, TrainError};
+use crate::optim::{AdamParams, LrScheduleConfig, OptimizerConfig};
+use crate::run_config::{ModelSettings, RunConfig, TaskSettings};
+
+/// A refinement task's settings, in the `[train]` table beside the loop's.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RefineTraining {
+    /// Vertices per training patch (§3.2.3.2: 1 000; §3.3.3.2: 1 024).
+    pub patch: usize,
+    /// Train on at most this many training characters (Table 3.4's 25 / 50 / 75 rows);
+    /// 0: all.
+    pub characters: usize,
+}
+
+impl Default for RefineTraining {
+    fn default() -> Self {
+        RefineTraining {
+            patch: 1000,
+            characters: 0,
+        }
+    }
+}
+
+impl RefineTraining {
+    /// Checks every range; errors name the field as in config.toml.
+    pub fn validate_values(&self) -> Result<()> {
+        if self.patch == 0 {
+            return Err(TrainError::config("train.patch", self.patch, "at least 1"));
+        }
+        Ok(())
+    }
+}
+
+impl TaskSettings for RefineTraining {
+    fn preset(name: &str) -> Result<Self> {
+        match name {
+            "cpu" | "paper" => Ok(RefineTraining::default()),
+            other => Err(TrainError::config("preset", other, "one of cpu, paper")),
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        self.validate_values()
+    }
+}
+
+/// The loop's settings of the thesis (§3.2.3.2): Adam from `learning_rate`, the rate
+/// times 0.75 when validation has not improved for 8 measurements, floor 5e-7, batch 8
+/// patches. `cpu` validates every 50 steps so the plateau rule acts within a short run.
+pub fn refine_trainer(name: &str, learning_rate: f64) -> Result<TrainConfig> {
+    let base = TrainConfig::preset(name)?;
+    let (steps, validate_every) = if name == "paper" {
+        (40_000, 500)
+    } else {
+        (600, 50)
+    };
+    Ok(TrainConfig {
+        steps,
+        learning_rate,
+        min_learning_rate: 5e-7,
+        optimizer: OptimizerConfig::Adam(AdamParams::default()),
+        lr_schedule: LrScheduleConfig::Plateau {
+            factor: 0.75,
+            patience: 8,
+        },
+        batch: if name == "paper" { 8 } else { 4 },
+        checkpoint_every: validate_every,
+        validate_every,
+        ..base
+    })
+}
+
+impl ModelSettings for DenseGatsConfig {
+    const KIND: ModelKind = ModelKind::DenseGats;
+
+    fn preset(name: &str) -> Result<Self> {
+        Ok(DenseGatsConfig::preset(name)?)
+    }
+
+    fn check(&self) -> std::result::Result<(), String> {
+        self.validate().map_err(|e| e.to_string())
+    }
+
+    fn trainer(name: &str) -> Result<TrainConfig> {
+        refine_trainer(name, 1e-3)
+    }
+}
+
+/// A DenseGATs run's configuration.
+pub type DenseGatsRun = RunConfig<DenseGatsConfig, RefineTraining>;

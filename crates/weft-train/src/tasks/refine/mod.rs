@@ -1,0 +1,301 @@
+//! Training a learned refinement of skinning (seed 001 ch. 3: DenseGATs, MultiResGNet)
+//! on a character dataset (`weft data characters`).
+//!
+//! - Items are (training character, pose, patch): each pose is cut into
+//!   `ceil(N / patch)` connected patches grown from seeded vertices (thesis-reference
+//!   D5/M5: "the surrounding 1024 consecutive vertices each time until traversing the
+//!   entire meshes"), so an epoch covers every mesh about once per pose. The seed vertex
+//!   is a function of the run seed and the item, so a resumed run sees the same patches.
+//! - The node features of a pose are computed on the whole coarse mesh (normals need
+//!   every neighbour) and gathered for the patch; a z-score normaliser fitted on the
+//!   training characters before the first step (§3.3: "normalized using the mean and
+//!   variance for each dimension") is saved in the run directory as `normalizer.json`.
+//! - Loss: mean squared error of the correction in centimetres (§3.2.3.2).
+//! - Validation: whole meshes (§3.2.3.2: "whole meshes at evaluation"), the mean
+//!   per-vertex distance to the truth in centimetres over every validation pose.
+
+pub mod config;
+
+use std::path::Path;
+use std::sync::Arc;
+
+use burn::module::Module;
+use burn::tensor::{Device, Tensor, TensorData};
+use weft_data::characters::{CharacterData, CharacterSet};
+use weft_data::Split;
+use weft_mesh::rng::SplitMix64;
+use weft_models::refine::{Character, CharacterRig, PositionFeature, RefineNet, CM_PER_M};
+use weft_nn::{Adjacency, FeatureNormalizer, NormalizerFit, Patch};
+
+pub use config::RefineTraining;
+
+use crate::error::{Result, TrainError};
+use crate::task::{LossTerm, Metrics, StepEnd, TrainTask};
+
+/// The validation metric: mean per-vertex error, cm.
+pub const MEAN_ERROR_CM: &str = "mean_error_cm";
+
+pub use weft_models::refine::NORMALIZER_FILE;
+
+/// The one loss term.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Term {
+    /// Mean squared error of the corrections, cm².
+    Mse,
+}
+
+impl LossTerm for Term {
+    fn name(self) -> &'static str {
+        "mse"
+    }
+}
+
+/// One character of the dataset, prepared for the model.
+pub struct Posed {
+    /// Its id.
+    pub id: String,
+    /// The rig, features and coarse deformation.
+    pub character: Character,
+    /// Its poses and their ground truth.
+    pub data: CharacterData,
+}
+
+impl Posed {
+    /// Prepares `data` for a model with `influences` weights per vertex.
+    pub fn new(id: &str, data: CharacterData, influences: usize) -> Result<Self> {
+        let rig = CharacterRig {
+            mesh: weft_mesh::TriMesh {
+                positions: data
+                    .rest_positions
+                    .iter()
+                    .map(|p| p.map(f64::from))
+                    .collect(),
+                faces: data.faces.clone(),
+            },
+            weights: data.weights.clone(),
+            joints: data.joints.iter().map(|j| j.map(f64::from)).collect(),
+            parents: data.parents.clone(),
+            joint_distances: data.joint_distances.clone(),
+        };
+        let character = Character::new(rig, influences)?;
+        Ok(Posed {
+            id: id.to_string(),
+            character,
+            data,
+        })
+    }
+
+    /// Normalised features `[N, 6 + S]`, the coarse mesh and the target corrections (cm,
+    /// `[N, 3]`) of pose `p`.
+    pub fn inputs(
+        &self,
+        p: usize,
+        position: PositionFeature,
+        normalizer: &FeatureNormalizer,
+    ) -> Result<(Vec<f32>, Vec<[f64; 3]>, Vec<f32>)> {
+        let input = self
+            .character
+            .pose_input(&self.data.poses[p], [0.0; 3], position)?;
+        let mut features = input.features;
+        normalizer.apply(&mut features).map_err(nn)?;
+        let targets = self.data.truth[p]
+            .iter()
+            .zip(&input.coarse)
+            .flat_map(|(t, c)| (0..3).map(move |k| ((f64::from(t[k]) - c[k]) * CM_PER_M) as f32))
+            .collect();
+        Ok((features, input.coarse, targets))
+    }
+}
+
+fn nn(e: weft_nn::NnError) -> TrainError {
+    TrainError::Nn(e)
+}
+
+/// Loads the characters of `split`, prepared for `influences`.
+pub fn load_split(set: &CharacterSet, split: Split, influences: usize) -> Result<Vec<Posed>> {
+    set.records(split)
+        .into_iter()
+        .map(|r| {
+            let data = set.load(r)?;
+            Posed::new(&r.id, data, influences)
+        })
+        .collect()
+}
+
+/// The normaliser fitted on every pose of `characters`.
+pub fn fit_normalizer(
+    characters: &[Posed],
+    position: PositionFeature,
+) -> Result<FeatureNormalizer> {
+    let width = characters
+        .first()
+        .map(|c| c.character.feature_width())
+        .ok_or_else(|| TrainError::config("data", "no training characters", "at least one"))?;
+    let mut fit = NormalizerFit::new(width).map_err(nn)?;
+    for c in characters {
+        for pose in &c.data.poses {
+            let input = c.character.pose_input(pose, [0.0; 3], position)?;
+            fit.observe(&input.features).map_err(nn)?;
+        }
+    }
+    fit.finish().map_err(nn)
+}
+
+/// The refinement task of a model `M`; see the module documentation.
+pub struct RefineTask<M> {
+    training: RefineTraining,
+    position: PositionFeature,
+    normalizer: FeatureNormalizer,
+    device: Device,
+    seed: u64,
+    train: Vec<Posed>,
+    validation: Vec<Posed>,
+    /// `(character, pose, patch)` per item.
+    items: Vec<(usize, usize, usize)>,
+    _model: std::marker::PhantomData<M>,
+}
+
+impl<M> RefineTask<M> {
+    /// The task over `train` and `validation` characters, with the normaliser fitted on
+    /// `train`.
+    pub fn new(
+        training: &RefineTraining,
+        position: PositionFeature,
+        train: Vec<Posed>,
+        validation: Vec<Posed>,
+        normalizer: FeatureNormalizer,
+        seed: u64,
+        device: &Device,
+    ) -> Result<Self> {
+        training.validate_values()?;
+        let mut items = Vec::new();
+        for (c, posed) in train.iter().enumerate() {
+            let patches = posed.character.vertex_count().div_ceil(training.patch);
+            for p in 0..posed.data.poses.len() {
+                items.extend((0..patches).map(|k| (c, p, k)));
+            }
+        }
+        Ok(RefineTask {
+            training: training.clone(),
+            position,
+            normalizer,
+            device: device.clone(),
+            seed,
+            train,
+            validation,
+            items,
+            _model: std::marker::PhantomData,
+        })
+    }
+
+    /// The fitted normaliser.
+    pub fn normalizer(&self) -> &FeatureNormalizer {
+        &self.normalizer
+    }
+
+    /// Training characters.
+    pub fn character_count(&self) -> usize {
+        self.train.len()
+    }
+
+    fn tensor(&self, rows: Vec<f32>, width: usize) -> Tensor<2> {
+        let n = rows.len() / width;
+        Tensor::from_data(TensorData::new(rows, [n, width]), &self.device)
+    }
+}
+
+/// Writes `normalizer` into the run directory `dir` atomically.
+pub fn save_normalizer(dir: &Path, normalizer: &FeatureNormalizer) -> Result<()> {
+    let path = dir.join(NORMALIZER_FILE);
+    let text = serde_json::to_string_pretty(normalizer).map_err(|e| TrainError::Write {
+        what: format!("{}: {e}", path.display()),
+        source: Box::new(e),
+    })?;
+    std::fs::create_dir_all(dir).map_err(|e| TrainError::io(dir, e))?;
+    weft_mesh::io::write_atomic(&path, |w| w.write_all(text.as_bytes()))
+        .map_err(|e| TrainError::io(&path, e))
+}
+
+impl<M> TrainTask for RefineTask<M>
+where
+    M: Module + Clone + RefineNet,
+{
+    type Model = M;
+    type Term = Term;
+    type Stage = ();
+
+    fn item_count(&self) -> usize {
+        self.items.len()
+    }
+
+    fn terms(&self, _: &()) -> Vec<(Term, f64)> {
+        vec![(Term::Mse, 1.0)]
+    }
+
+    fn losses(&mut self, model: &M, item: usize, _: &[Term]) -> Result<Vec<Tensor<1>>> {
+        let (c, p, k) = self.items[item];
+        let posed = &self.train[c];
+        let n = posed.character.vertex_count();
+        let mut rng = SplitMix64::new(
+            self.seed ^ (item as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ k as u64,
+        );
+        let seed_vertex = rng.below(n);
+        let patch =
+            Patch::grow(posed.character.graph(), seed_vertex, self.training.patch).map_err(nn)?;
+        let (features, _, targets) = posed.inputs(p, self.position, &self.normalizer)?;
+        let width = posed.character.feature_width();
+        let x = self.tensor(patch.gather(&features, width).map_err(nn)?, width);
+        let y = self.tensor(patch.gather(&targets, 3).map_err(nn)?, 3);
+        let adjacency = Arc::new(Adjacency::from_graph(patch.graph()));
+        let pred = model.forward(x, &adjacency)?;
+        Ok(vec![(pred - y).powi_scalar(2).mean()])
+    }
+
+    fn validate(&mut self, model: &M) -> Result<Metrics> {
+        let (mut sum, mut count) = (0.0f64, 0usize);
+        for posed in &self.validation {
+            let width = posed.character.feature_width();
+            for p in 0..posed.data.poses.len() {
+                let (features, _, targets) = posed.inputs(p, self.position, &self.normalizer)?;
+                let pred =
+                    model.forward(self.tensor(features, width), posed.character.adjacency())?;
+                let pred: Vec<f32> = pred
+                    .into_data()
+                    .convert::<f32>()
+                    .try_into_vec::<f32>()
+                    .map_err(|e| TrainError::Shape {
+                        what: "predicted corrections".into(),
+                        expected: "f32 values".into(),
+                        found: format!("{e:?}"),
+                    })?;
+                for (a, b) in pred.chunks_exact(3).zip(targets.chunks_exact(3)) {
+                    let d2: f32 = (0..3).map(|k| (a[k] - b[k]).powi(2)).sum();
+                    sum += f64::from(d2.sqrt());
+                    count += 1;
+                }
+            }
+        }
+        let mean = if count == 0 {
+            f64::NAN
+        } else {
+            sum / count as f64
+        };
+        Ok(Metrics::from([(MEAN_ERROR_CM.to_string(), mean)]))
+    }
+
+    fn primary_metric(&self) -> &'static str {
+        MEAN_ERROR_CM
+    }
+
+    fn stage_name(&self, _: &()) -> String {
+        "train".into()
+    }
+
+    fn advance(&self, _: &mut (), _: &StepEnd<'_, Term>) -> bool {
+        false
+    }
+
+    fn enter_stage(&mut self, model: M, _: &()) -> M {
+        model
+    }
+}
