@@ -7,6 +7,7 @@
 //! plus the margin along the outward direction, the same step a drape's first frame
 //! performs, so the template starts collision-free for the simulator.
 
+use weft_body::features::volumetric::{VolumetricDistance, VolumetricParams};
 use weft_body::features::{transfer_weights, SkinningWeights};
 use weft_body::query::BodySurface;
 use weft_body::BodyModel;
@@ -104,6 +105,20 @@ impl FitBody {
         let t = transfer_weights(&self.surface, &body_weights, points)
             .map_err(|e| GarmentError::Measurements(format!("weight transfer: {e}")))?;
         Ok(t.weights)
+    }
+
+    /// Volumetric distance from every point to every joint through this body (weft-body's
+    /// `VolumetricDistance`, seed 001's `x_i`), row-major `points × joints`.
+    pub fn joint_distances(
+        &self,
+        joints: &[[f64; 3]],
+        parents: &[Option<usize>],
+        points: &[[f64; 3]],
+    ) -> Result<Vec<f32>, GarmentError> {
+        VolumetricDistance::new(&self.surface, joints, parents, VolumetricParams::default())
+            .and_then(|d| d.matrix(points))
+            .map(|m| m.to_f32())
+            .map_err(|e| GarmentError::Measurements(format!("volumetric joint distances: {e}")))
     }
 }
 

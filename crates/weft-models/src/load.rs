@@ -8,6 +8,7 @@ use crate::deformer::Deformer;
 use crate::error::ModelError;
 use crate::kind::ModelKind;
 use crate::multilevel::Predictor;
+use crate::refine::RefinePredictor;
 use crate::run::read_run_config;
 
 /// The trained system in `dir` (its config.toml and latest checkpoint), on the CPU.
@@ -18,6 +19,7 @@ pub fn load_deformer(dir: &Path) -> Result<Box<dyn Deformer + Send>, ModelError>
     let (header, _) = read_run_config(dir)?;
     match header.model {
         ModelKind::Multilevel => Ok(Box::new(Predictor::load(dir)?)),
+        ModelKind::DenseGats | ModelKind::MultiResGnet => Ok(Box::new(RefinePredictor::load(dir)?)),
         other => Err(ModelError::Run {
             path: dir.join("config.toml"),
             message: format!(

@@ -48,6 +48,21 @@ pub struct EvalArgs {
     /// Print the report (or the comparison) as JSON on stdout.
     #[arg(long)]
     json: bool,
+    /// Character datasets only: move the root of every pose by this (x,y,z, metres), the
+    /// translation test of seed 001 Fig. 3.23.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
+    translate: Option<[f64; 3]>,
+}
+
+fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>().map_err(|e| format!("{x:?}: {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([x, y, z]),
+        _ => Err(format!("{s:?}: expected three finite numbers x,y,z")),
+    }
 }
 
 fn parse_split(s: &str) -> Result<Split, String> {
@@ -116,6 +131,12 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             "{} runs given; pass --compare to evaluate several runs as one table",
             args.runs.len()
         );
+    }
+    if data
+        .join(weft_data::characters::CHARACTER_MANIFEST)
+        .is_file()
+    {
+        return run_characters(args, data);
     }
     let opts = EvalOptions {
         split: args.split,
@@ -190,4 +211,31 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         emit(&s)?;
     }
     Ok(())
+}
+
+/// A character dataset: every run (DenseGATs, MultiResGNet) and the LBS/DQS baselines as
+/// seed 001's tables, written to --out (characters.md, characters.json).
+fn run_characters(args: &EvalArgs, data: &Path) -> Result<()> {
+    let table = weft_pipeline::characters::evaluate_characters(
+        &args.runs,
+        data,
+        args.split,
+        args.translate.unwrap_or([0.0; 3]),
+    )?;
+    let md = format!(
+        "{}\nReproduce with: `{}`\n",
+        table.markdown(),
+        command_line()
+    );
+    std::fs::create_dir_all(&args.out).with_context(|| args.out.display().to_string())?;
+    write_text(&args.out.join("characters.md"), &md)?;
+    write_text(
+        &args.out.join("characters.json"),
+        &serde_json::to_string_pretty(&table)?,
+    )?;
+    if args.json {
+        emit(&serde_json::to_string_pretty(&table)?)
+    } else {
+        emit(&md)
+    }
 }

@@ -9,7 +9,6 @@
 //! body's skinning weights at their closest skin point (weft-body's transfer), which is
 //! exact for a layer on the skin.
 
-use weft_body::features::volumetric::{VolumetricDistance, VolumetricParams};
 use weft_body::skinning::SkinWeights;
 use weft_body::BodyModel;
 use weft_garment::{FitBody, GarmentKind, Style};
@@ -91,13 +90,12 @@ pub fn dress(
         .joints(betas)
         .map_err(|e| garment_err("rest joints", &e))?;
     let parents = model.skeleton().parents().to_vec();
-    let distances =
-        VolumetricDistance::new(&fit.surface, &joints, &parents, VolumetricParams::default())
-            .and_then(|d| d.matrix(&mesh.positions))
-            .map_err(|e| garment_err("volumetric joint distances", &e))?;
+    let joint_distances = fit
+        .joint_distances(&joints, &parents, &mesh.positions)
+        .map_err(|e| garment_err("volumetric joint distances", &e))?;
     Ok(DressedCharacter {
         weights: SkinWeights::from_dense(&dense, s),
-        joint_distances: distances.to_f32(),
+        joint_distances,
         mesh,
         parts,
         joints,

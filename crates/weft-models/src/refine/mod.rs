@@ -4,9 +4,11 @@
 //! deformation, `M = M_coarse + W(G; Ψ)` (eq. 3.1). Per frame, no history.
 //!
 //! - [`character`]: the rig, the coarse deformation and the node features;
-//! - [`RefineNet`]: what DenseGATs ([`crate::densegats`]) and MultiResGNet implement.
+//! - [`RefineNet`]: what DenseGATs ([`crate::densegats`]) and MultiResGNet implement;
+//! - [`predictor`]: a trained run for inference, and as a [`crate::Deformer`].
 
 pub mod character;
+pub mod predictor;
 
 use std::path::Path;
 use std::sync::Arc;
@@ -17,6 +19,7 @@ use weft_nn::{Adjacency, FeatureNormalizer};
 use crate::error::ModelError;
 
 pub use character::{Character, CharacterRig, PoseInput, PositionFeature};
+pub use predictor::RefinePredictor;
 
 /// The feature normaliser's file in a run directory (fitted on the training characters
 /// before the first step, read by every consumer of the run).
