@@ -21,12 +21,13 @@
 //!
 //! The solve starts from dual quaternion skinning (no collapsed triangles to recover
 //! from); where the tie is weak, membrane, bending and volume decide, so the result
-//! keeps DQS's twist without its bulge at bends. Every term is zero with zero gradient when all bones move by the same rigid
-//! transform, so rigid motion in gives exactly that rigid motion out.
+//! keeps DQS's twist without its bulge at bends. Every term is zero with zero gradient
+//! when all bones move by the same rigid transform, so rigid motion in gives exactly that
+//! rigid motion out.
 //!
 //! Speed: with [`ElasticSkinParams::solve_joint_regions_only`] (default) the vertices
 //! whose tie is full are placed at their tie targets and only the joint regions (and a
-//! ring of fixed neighbours) enter Newton, about a third of a body's vertices.
+//! ring of fixed neighbours) enter Newton: 3 378 of the default body's 13 380 vertices.
 
 mod volume;
 
