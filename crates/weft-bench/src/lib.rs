@@ -7,11 +7,13 @@
 //! - [`timing`]: the median-of-repetitions timer every bench uses;
 //! - [`multilevel`]: the Multilevel model's inference stages and training step;
 //! - [`gat`]: one GAT layer, fused kernel against burn's generic path;
+//! - [`densegats`]: DenseGATs per stage on a character, with the linear maps' floor;
 //! - [`simulate`]: the cloth simulator on a garment and a motion, cost and quality.
 //!
 //! Figures are wall-clock times on the calling thread pool (rayon's, sized by
 //! `RAYON_NUM_THREADS`); each result records the thread count.
 
+pub mod densegats;
 pub mod error;
 pub mod gat;
 pub mod multilevel;

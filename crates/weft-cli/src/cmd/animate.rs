@@ -23,8 +23,10 @@ pub struct AnimateArgs {
     #[arg(value_name = "RUN")]
     run: PathBuf,
     /// The garment (.obj/.ply), any topology, dressed on the body at --betas in its rest
-    /// pose (e.g. from `weft garment generate`).
-    #[arg(long, value_name = "G.obj")]
+    /// pose (e.g. from `weft garment generate`); for a DenseGATs or MultiResGNet run, the
+    /// character mesh (body and tight clothes as one mesh, `--character`), bound to the
+    /// body at --betas.
+    #[arg(long, value_name = "G.obj", alias = "character")]
     garment: PathBuf,
     #[command(flatten)]
     body: BodyArgs,

@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
+use weft_bench::densegats::DenseGatsBench;
 use weft_bench::gat::GatBench;
 use weft_bench::multilevel::MultilevelBench;
 use weft_bench::simulate::bench_simulate;
@@ -26,6 +27,9 @@ pub enum BenchCommand {
     Multilevel(MultilevelArgs),
     /// One GAT layer, fused kernel against burn's generic path, forward and backward.
     Gat(GatArgs),
+    /// DenseGATs (seed 001 §3.2) on a character, one frame per stage (pose inputs, input
+    /// transform, each dense module, output transform) in ms, with the linear maps' floor.
+    Densegats(DenseGatsArgs),
     /// The cloth simulator: seconds, Newton and PCG iterations per frame, edge strain
     /// and depth in the body.
     Simulate(SimulateArgs),
@@ -85,6 +89,21 @@ pub struct GatArgs {
 }
 
 #[derive(Args)]
+pub struct DenseGatsArgs {
+    /// Model preset: cpu or paper.
+    #[arg(long, default_value = "paper")]
+    preset: String,
+    /// Vertices of the character (several: 10000,17000).
+    #[arg(long, value_delimiter = ',', default_value = "10000")]
+    vertices: Vec<usize>,
+    /// Timed runs per figure, after one warm-up (the median is reported).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=10000))]
+    reps: u32,
+    #[command(flatten)]
+    common: Common,
+}
+
+#[derive(Args)]
 pub struct SimulateArgs {
     /// The garment (.obj/.ply) fitted to the body in its rest pose; default: a skirt of
     /// --vertices vertices.
@@ -112,6 +131,7 @@ pub fn run(command: BenchCommand) -> Result<()> {
     match command {
         BenchCommand::Multilevel(a) => multilevel(&a),
         BenchCommand::Gat(a) => gat(&a),
+        BenchCommand::Densegats(a) => densegats(&a),
         BenchCommand::Simulate(a) => simulate(&a),
     }
 }
@@ -153,6 +173,24 @@ fn gat(args: &GatArgs) -> Result<()> {
     let mut out = Output::new(args.common.json);
     for f in figures? {
         out.row(&f)?;
+    }
+    Ok(())
+}
+
+fn densegats(args: &DenseGatsArgs) -> Result<()> {
+    let (body, _) = args.common.body.load()?;
+    let mut out = Output::new(args.common.json);
+    for &vertices in &args.vertices {
+        let bench = DenseGatsBench {
+            preset: args.preset.clone(),
+            vertices,
+            reps: args.reps as usize,
+        };
+        let label = format!("densegats {} N≈{vertices}", args.preset);
+        let spinner = spinner(&label);
+        let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
+        spinner.finish_and_clear();
+        out.row(&figures.with_context(|| label.clone())?)?;
     }
     Ok(())
 }

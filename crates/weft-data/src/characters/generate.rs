@@ -16,6 +16,7 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use weft_body::kinematics::Skeleton;
+use weft_body::skinning::SkinWeights;
 use weft_body::{BodyModel, Pose, Skinning};
 use weft_garment::Style;
 use weft_mesh::io::lock::{remove_stale_temps, Access, DirLock, LOCK_FILE};
@@ -256,10 +257,15 @@ fn solve_truth(
     let to_f32 = |v: Vec<[f64; 3]>| v.into_iter().map(|p| p.map(|x| x as f32)).collect();
     match config.truth {
         TruthSource::Elastic => {
+            // The body is solved; tight layers ride on the deformed skin.
+            let (body_n, body_faces) = character.body_counts;
+            let s = character.joint_count();
+            let body_weights =
+                SkinWeights::from_dense(&character.weights.to_dense()[..body_n * s], s);
             let skin = ElasticSkin::new(
-                &character.mesh.positions,
-                &character.mesh.faces,
-                &character.weights,
+                &character.mesh.positions[..body_n],
+                &character.mesh.faces[..body_faces],
+                &body_weights,
                 &ElasticSkinParams::default(),
             )
             .map_err(|e| fail(format!("elastic skinning setup: {e}")))?;
@@ -273,11 +279,11 @@ fn solve_truth(
                     let transforms = skeleton
                         .skinning_transforms_axis_angle(&character.joints, &pose, [0.0; 3])
                         .map_err(|e| fail(format!("pose {i}: {e}")))?;
-                    let x = skin
+                    let body = skin
                         .deform(&transforms)
                         .map_err(|e| fail(format!("pose {i}: elastic skinning: {e}")))?;
                     bar.inc(1);
-                    Ok(to_f32(x))
+                    Ok(to_f32(character.place_layers(&body)))
                 })
                 .collect()
         }
