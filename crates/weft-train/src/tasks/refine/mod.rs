@@ -49,6 +49,10 @@ impl LossTerm for Term {
     }
 }
 
+/// A pose's normalised features (row-major `N × (6 + S)`), coarse mesh and target
+/// corrections (cm, row-major `N × 3`).
+pub type PoseTensors = (Vec<f32>, Vec<[f64; 3]>, Vec<f32>);
+
 /// One character of the dataset, prepared for the model.
 pub struct Posed {
     /// Its id.
@@ -91,7 +95,7 @@ impl Posed {
         p: usize,
         position: PositionFeature,
         normalizer: &FeatureNormalizer,
-    ) -> Result<(Vec<f32>, Vec<[f64; 3]>, Vec<f32>)> {
+    ) -> Result<PoseTensors> {
         let input = self
             .character
             .pose_input(&self.data.poses[p], [0.0; 3], position)?;
