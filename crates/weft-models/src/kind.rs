@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ModelKind {
-    /// Seed 000's Multilevel model (the only one implemented today).
+    /// Seed 000's Multilevel model.
     Multilevel,
     /// HOOD: a hierarchical graph network trained by the incremental potential.
     Hood,
@@ -47,7 +47,10 @@ impl ModelKind {
     /// Whether this build can train and run the kind; callers refuse the others with a
     /// clear message instead of stubbing them.
     pub fn is_implemented(self) -> bool {
-        matches!(self, ModelKind::Multilevel | ModelKind::DenseGats)
+        matches!(
+            self,
+            ModelKind::Multilevel | ModelKind::DenseGats | ModelKind::MultiResGnet
+        )
     }
 }
 
@@ -104,6 +107,13 @@ mod tests {
             .into_iter()
             .filter(|k| k.is_implemented())
             .collect();
-        assert_eq!(implemented, [ModelKind::Multilevel]);
+        assert_eq!(
+            implemented,
+            [
+                ModelKind::Multilevel,
+                ModelKind::DenseGats,
+                ModelKind::MultiResGnet
+            ]
+        );
     }
 }

@@ -4,7 +4,7 @@
 //!   consumer (evaluation, `weft animate`, the demo) calls;
 //! - [`baseline`]: the no-learning LBS and DQS baselines;
 //! - [`refine`]: seed 001's learned refinement of skinning (case 1: dressed characters),
-//!   shared by [`densegats`] (DenseGATs, §3.2);
+//!   shared by [`densegats`] (DenseGATs, §3.2) and [`multiresgnet`] (MultiResGNet, §3.3);
 //! - [`multilevel`]: the Multilevel model of seed 000 (multi-source garment graph,
 //!   structure-preserving pooling, temporal skinning weights and blend shapes, LBS);
 //! - [`kind`]: [`ModelKind`], the systems by name;
@@ -17,6 +17,7 @@ pub mod error;
 pub mod kind;
 pub mod load;
 pub mod multilevel;
+pub mod multiresgnet;
 pub mod refine;
 pub mod run;
 

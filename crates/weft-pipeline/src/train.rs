@@ -11,7 +11,7 @@ use weft_models::refine::{PositionFeature, RefineNet};
 use weft_models::ModelKind;
 use weft_nn::backend::{cpu_autodiff, seeded};
 use weft_train::run_config::{ModelSettings, RunConfig, TaskSettings};
-use weft_train::tasks::refine::config::{DenseGatsRun, RefineTraining};
+use weft_train::tasks::refine::config::{DenseGatsRun, MultiResGnetRun, RefineTraining};
 use weft_train::tasks::refine::{fit_normalizer, load_split, save_normalizer, RefineTask};
 use weft_train::{train, MultilevelRun, MultilevelTask, Outcome, RunOptions, TrainTask};
 
@@ -63,6 +63,7 @@ pub fn preset_toml(kind: ModelKind, preset: &str) -> Result<String, PipelineErro
     match kind {
         ModelKind::Multilevel => Ok(MultilevelRun::preset(preset)?.to_toml()?),
         ModelKind::DenseGats => Ok(DenseGatsRun::preset(preset)?.to_toml()?),
+        ModelKind::MultiResGnet => Ok(MultiResGnetRun::preset(preset)?.to_toml()?),
         _ => unreachable!("refused by check_implemented"),
     }
 }
@@ -82,6 +83,10 @@ pub fn train_run(spec: &TrainSpec, log: &mut dyn FnMut(&str)) -> Result<Outcome,
         }
         ModelKind::DenseGats => {
             let cfg: DenseGatsRun = resolve(spec)?;
+            train_refine(&cfg, cfg.model.position, cfg.model.influences, spec, log)
+        }
+        ModelKind::MultiResGnet => {
+            let cfg: MultiResGnetRun = resolve(spec)?;
             train_refine(&cfg, cfg.model.position, cfg.model.influences, spec, log)
         }
         _ => unreachable!("refused by check_implemented"),
@@ -162,6 +167,13 @@ pub trait RefineModel: ModelSettings {
 
 impl RefineModel for weft_models::densegats::DenseGatsConfig {
     type Net = weft_models::densegats::DenseGats;
+    fn build(&self, device: &weft_nn::burn::tensor::Device) -> Result<Self::Net, PipelineError> {
+        Ok(self.init(device)?)
+    }
+}
+
+impl RefineModel for weft_models::multiresgnet::MultiResGnetConfig {
+    type Net = weft_models::multiresgnet::MultiResGnet;
     fn build(&self, device: &weft_nn::burn::tensor::Device) -> Result<Self::Net, PipelineError> {
         Ok(self.init(device)?)
     }

@@ -34,6 +34,12 @@ pub trait ModelSettings:
 pub trait TaskSettings: Clone + PartialEq + std::fmt::Debug + Serialize + DeserializeOwned {
     /// The preset `name` (`cpu` or `paper`).
     fn preset(name: &str) -> Result<Self>;
+    /// The preset `name` for training `model`, for a task several models share with
+    /// different settings (default: [`TaskSettings::preset`]).
+    fn preset_for(name: &str, model: ModelKind) -> Result<Self> {
+        let _ = model;
+        Self::preset(name)
+    }
     /// Checks the values; errors name the field as in config.toml.
     fn validate(&self) -> Result<()>;
 }
@@ -57,7 +63,7 @@ impl<M: ModelSettings, T: TaskSettings> RunConfig<M, T> {
             model: M::preset(name)?,
             train: TrainTable {
                 trainer: M::trainer(name)?,
-                task: T::preset(name)?,
+                task: T::preset_for(name, M::KIND)?,
             },
         })
     }

@@ -15,18 +15,14 @@
 //! correction of a few millimetres is then of order 0.1–1, where the last layer's
 //! initialisation starts.
 
-use std::sync::Arc;
-
 use burn::config::Config;
 use burn::module::Module;
 use burn::nn::{Linear, LinearConfig};
 use burn::tensor::{Device, Tensor};
-use weft_nn::{
-    Activation, Adjacency, DenseGatModule, DenseGatModuleConfig, Mlp, MlpConfig, NormedGat,
-};
+use weft_nn::{Activation, DenseGatModule, DenseGatModuleConfig, GraphBatch, Mlp, NormedGat};
 
 use crate::error::ModelError;
-use crate::refine::{PositionFeature, RefineNet};
+use crate::refine::{nn_error as nn, tanh_mlp, PositionFeature, RefineNet};
 
 /// Configuration of [`DenseGats`].
 #[derive(Config, Debug, PartialEq)]
@@ -137,13 +133,7 @@ impl DenseGatsConfig {
     /// Builds the network.
     pub fn init(&self, device: &Device) -> Result<DenseGats, ModelError> {
         self.validate()?;
-        let nn = |e: weft_nn::NnError| ModelError::Config(e.to_string());
-        let input = MlpConfig::new(6 + self.joints, self.input_widths.clone())
-            .with_activation(Activation::Tanh)
-            .with_output_activation(Activation::Tanh)
-            .with_batch_norm(self.batch_norm)
-            .init(device)
-            .map_err(nn)?;
+        let input = tanh_mlp(6 + self.joints, &self.input_widths, self.batch_norm, device)?;
         let mut d = input.output_width();
         let mut modules = Vec::with_capacity(self.modules);
         let mut transitions = Vec::with_capacity(self.modules - 1);
@@ -160,12 +150,7 @@ impl DenseGatsConfig {
         let hidden = if self.output_widths.is_empty() {
             None
         } else {
-            let mlp = MlpConfig::new(d, self.output_widths.clone())
-                .with_activation(Activation::Tanh)
-                .with_output_activation(Activation::Tanh)
-                .with_batch_norm(self.batch_norm)
-                .init(device)
-                .map_err(nn)?;
+            let mlp = tanh_mlp(d, &self.output_widths, self.batch_norm, device)?;
             d = mlp.output_width();
             Some(mlp)
         };
@@ -195,8 +180,8 @@ pub struct DenseGats {
 }
 
 impl RefineNet for DenseGats {
-    fn forward(&self, x: Tensor<2>, adjacency: &Arc<Adjacency>) -> Result<Tensor<2>, ModelError> {
-        let nn = |e: weft_nn::NnError| ModelError::Config(e.to_string());
+    fn forward(&self, x: Tensor<2>, graph: &GraphBatch) -> Result<Tensor<2>, ModelError> {
+        let adjacency = graph.adjacency();
         let mut h = self.input.forward(x).map_err(nn)?;
         for (k, m) in self.modules.iter().enumerate() {
             if k > 0 {
@@ -234,12 +219,12 @@ mod tests {
             net.modules.iter().map(|m| m.blocks.len()).sum::<usize>() + net.transitions.len();
         assert_eq!(blocks, 20);
         let mesh = primitives::grid(4, 3, 1.0);
-        let adjacency = Arc::new(Adjacency::from_graph(&mesh.graph()));
+        let graph = GraphBatch::single(&mesh.graph());
         let n = mesh.positions.len();
         let x = Tensor::<2>::random([n, 30], burn::tensor::Distribution::Default, &device);
-        assert_eq!(net.forward(x, &adjacency).unwrap().dims(), [n, 3]);
+        assert_eq!(net.forward(x, &graph).unwrap().dims(), [n, 3]);
         assert!(net
-            .forward(Tensor::<2>::zeros([n, 29], &device), &adjacency)
+            .forward(Tensor::<2>::zeros([n, 29], &device), &graph)
             .is_err());
     }
 

@@ -8,8 +8,6 @@
 //! `M_coarse`), or in place of positions the relative skinning descriptor of eq. 3.9,
 //! which is LBS without translations and so does not change when the character moves.
 
-use std::sync::Arc;
-
 use serde::{Deserialize, Serialize};
 use weft_body::features::body::descriptor_from_transforms;
 use weft_body::features::weights::SkinningWeights;
@@ -17,7 +15,7 @@ use weft_body::kinematics::{Rigid, Skeleton};
 use weft_body::skinning::{dqs, lbs, SkinWeights};
 use weft_body::{Pose, Skinning};
 use weft_mesh::TriMesh;
-use weft_nn::Adjacency;
+use weft_nn::GraphBatch;
 
 use crate::error::ModelError;
 
@@ -55,8 +53,7 @@ pub struct Character {
     skeleton: Skeleton,
     skin: SkinWeights,
     descriptor_weights: SkinningWeights,
-    adjacency: Arc<Adjacency>,
-    graph: weft_mesh::Graph,
+    graph: GraphBatch,
 }
 
 /// One pose's coarse mesh and node features.
@@ -126,14 +123,12 @@ impl Character {
         let skin = SkinWeights::from_dense(&dense, s).truncated(influences);
         let descriptor_weights = SkinningWeights::new(skin.to_dense(), s)
             .map_err(|e| ModelError::Body(format!("skinning weights: {e}")))?;
-        let graph = rig.mesh.graph();
-        let adjacency = Arc::new(Adjacency::from_graph(&graph));
+        let graph = GraphBatch::single(&rig.mesh.graph());
         Ok(Character {
             rig,
             skeleton,
             skin,
             descriptor_weights,
-            adjacency,
             graph,
         })
     }
@@ -158,14 +153,14 @@ impl Character {
         &self.rig
     }
 
-    /// The whole mesh's GAT adjacency (self-loops included).
-    pub fn adjacency(&self) -> &Arc<Adjacency> {
-        &self.adjacency
+    /// The whole mesh as a one-graph batch (what [`super::RefineNet`] runs on).
+    pub fn batch(&self) -> &GraphBatch {
+        &self.graph
     }
 
     /// The mesh graph (for patches).
     pub fn graph(&self) -> &weft_mesh::Graph {
-        &self.graph
+        self.graph.graph()
     }
 
     /// The skinning transforms of `pose` with the root at `translation`.

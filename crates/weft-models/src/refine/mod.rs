@@ -4,17 +4,18 @@
 //! deformation, `M = M_coarse + W(G; Ψ)` (eq. 3.1). Per frame, no history.
 //!
 //! - [`character`]: the rig, the coarse deformation and the node features;
-//! - [`RefineNet`]: what DenseGATs ([`crate::densegats`]) and MultiResGNet implement;
+//! - [`RefineNet`]: what DenseGATs ([`crate::densegats`]) and MultiResGNet
+//!   ([`crate::multiresgnet`]) implement, and [`tanh_mlp`], the feature transforms both
+//!   put before and after their graph layers;
 //! - [`predictor`]: a trained run for inference, and as a [`crate::Deformer`].
 
 pub mod character;
 pub mod predictor;
 
 use std::path::Path;
-use std::sync::Arc;
 
-use burn::tensor::Tensor;
-use weft_nn::{Adjacency, FeatureNormalizer};
+use burn::tensor::{Device, Tensor};
+use weft_nn::{Activation, FeatureNormalizer, GraphBatch, Mlp, MlpConfig};
 
 use crate::error::ModelError;
 
@@ -42,9 +43,33 @@ pub fn read_normalizer(path: &Path) -> Result<FeatureNormalizer, ModelError> {
 /// Centimetres per metre: refinement networks predict corrections in centimetres.
 pub const CM_PER_M: f64 = 100.0;
 
-/// A refinement network: normalised node features `[N, 6 + S]` on the graph of
-/// `adjacency` to per-vertex corrections `[N, 3]` in centimetres.
+/// A refinement network: normalised node features `[N, 6 + S]` on the graph `graph` (a
+/// whole mesh or a patch, as a one-graph [`GraphBatch`]: its adjacency for the GAT
+/// blocks, the graph itself for MultiResGNet's pooling) to per-vertex corrections
+/// `[N, 3]` in centimetres.
 pub trait RefineNet {
     /// The corrections of every node.
-    fn forward(&self, x: Tensor<2>, adjacency: &Arc<Adjacency>) -> Result<Tensor<2>, ModelError>;
+    fn forward(&self, x: Tensor<2>, graph: &GraphBatch) -> Result<Tensor<2>, ModelError>;
+}
+
+/// The feature transforms of seed 001 (§3.2.3.2, §3.3.3.2): linear layers of `widths`
+/// from `d_input`, tanh after every one, batch normalisation before every tanh when
+/// `batch_norm` (decision D6).
+pub fn tanh_mlp(
+    d_input: usize,
+    widths: &[usize],
+    batch_norm: bool,
+    device: &Device,
+) -> Result<Mlp, ModelError> {
+    MlpConfig::new(d_input, widths.to_vec())
+        .with_activation(Activation::Tanh)
+        .with_output_activation(Activation::Tanh)
+        .with_batch_norm(batch_norm)
+        .init(device)
+        .map_err(nn_error)
+}
+
+/// A layer's error as a model error (shapes and sizes the config should have caught).
+pub(crate) fn nn_error(e: weft_nn::NnError) -> ModelError {
+    ModelError::Config(e.to_string())
 }

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 use weft_models::densegats::DenseGatsConfig;
+use weft_models::multiresgnet::MultiResGnetConfig;
 use weft_models::ModelKind;
 
 use crate::config::TrainConfig;
@@ -14,7 +15,8 @@ use crate::run_config::{ModelSettings, RunConfig, TaskSettings};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RefineTraining {
-    /// Vertices per training patch (§3.2.3.2: 1 000; §3.3.3.2: 1 024).
+    /// Vertices per training patch (§3.2.3.2: 1 000; §3.3.3.2: 1 024, the preset's
+    /// for MultiResGNet).
     pub patch: usize,
     /// Train on at most this many training characters (Table 3.4's 25 / 50 / 75 rows);
     /// 0: all.
@@ -46,6 +48,17 @@ impl TaskSettings for RefineTraining {
             "cpu" | "paper" => Ok(RefineTraining::default()),
             other => Err(TrainError::config("preset", other, "one of cpu, paper")),
         }
+    }
+
+    fn preset_for(name: &str, model: ModelKind) -> Result<Self> {
+        let preset = Self::preset(name)?;
+        Ok(match model {
+            ModelKind::MultiResGnet => RefineTraining {
+                patch: MultiResGnetConfig::PATCH,
+                ..preset
+            },
+            _ => preset,
+        })
     }
 
     fn validate(&self) -> Result<()> {
@@ -97,3 +110,44 @@ impl ModelSettings for DenseGatsConfig {
 
 /// A DenseGATs run's configuration.
 pub type DenseGatsRun = RunConfig<DenseGatsConfig, RefineTraining>;
+
+impl ModelSettings for MultiResGnetConfig {
+    const KIND: ModelKind = ModelKind::MultiResGnet;
+
+    fn preset(name: &str) -> Result<Self> {
+        Ok(MultiResGnetConfig::preset(name)?)
+    }
+
+    fn check(&self) -> std::result::Result<(), String> {
+        self.validate().map_err(|e| e.to_string())
+    }
+
+    /// §3.3.3.2: Adam from 0.01.
+    fn trainer(name: &str) -> Result<TrainConfig> {
+        refine_trainer(name, 1e-2)
+    }
+}
+
+/// A MultiResGNet run's configuration.
+pub type MultiResGnetRun = RunConfig<MultiResGnetConfig, RefineTraining>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_follow_each_model_of_the_thesis() {
+        // §3.2.3.2: Adam 1e-3, patches of 1 000; §3.3.3.2: Adam 0.01, patches of 1 024.
+        let dense = DenseGatsRun::preset("paper").unwrap();
+        assert_eq!(dense.train.task.patch, 1000);
+        assert_eq!(dense.train.trainer.learning_rate, 1e-3);
+        let multires = MultiResGnetRun::preset("paper").unwrap();
+        assert_eq!(multires.train.task.patch, 1024);
+        assert_eq!(multires.train.trainer.learning_rate, 1e-2);
+        assert_eq!(multires.model, MultiResGnetConfig::new());
+        let cpu = MultiResGnetRun::preset("cpu").unwrap();
+        assert_eq!(cpu.train.task.patch, 1024);
+        assert!(cpu.to_toml().unwrap().contains("patch = 1024"));
+        assert!(MultiResGnetRun::preset("huge").is_err());
+    }
+}

@@ -17,7 +17,6 @@
 pub mod config;
 
 use std::path::Path;
-use std::sync::Arc;
 
 use burn::module::Module;
 use burn::tensor::{Device, Tensor, TensorData};
@@ -25,7 +24,7 @@ use weft_data::characters::{CharacterData, CharacterSet};
 use weft_data::Split;
 use weft_mesh::rng::SplitMix64;
 use weft_models::refine::{Character, CharacterRig, PositionFeature, RefineNet, CM_PER_M};
-use weft_nn::{Adjacency, FeatureNormalizer, NormalizerFit, Patch};
+use weft_nn::{FeatureNormalizer, GraphBatch, NormalizerFit, Patch};
 
 pub use config::RefineTraining;
 
@@ -49,6 +48,10 @@ impl LossTerm for Term {
         "mse"
     }
 }
+
+/// A pose's normalised features (row-major `N × (6 + S)`), coarse mesh and target
+/// corrections (cm, row-major `N × 3`).
+pub type PoseTensors = (Vec<f32>, Vec<[f64; 3]>, Vec<f32>);
 
 /// One character of the dataset, prepared for the model.
 pub struct Posed {
@@ -92,7 +95,7 @@ impl Posed {
         p: usize,
         position: PositionFeature,
         normalizer: &FeatureNormalizer,
-    ) -> Result<(Vec<f32>, Vec<[f64; 3]>, Vec<f32>)> {
+    ) -> Result<PoseTensors> {
         let input = self
             .character
             .pose_input(&self.data.poses[p], [0.0; 3], position)?;
@@ -246,8 +249,7 @@ where
         let width = posed.character.feature_width();
         let x = self.tensor(patch.gather(&features, width).map_err(nn)?, width);
         let y = self.tensor(patch.gather(&targets, 3).map_err(nn)?, 3);
-        let adjacency = Arc::new(Adjacency::from_graph(patch.graph()));
-        let pred = model.forward(x, &adjacency)?;
+        let pred = model.forward(x, &GraphBatch::single(patch.graph()))?;
         Ok(vec![(pred - y).powi_scalar(2).mean()])
     }
 
@@ -257,8 +259,7 @@ where
             let width = posed.character.feature_width();
             for p in 0..posed.data.poses.len() {
                 let (features, _, targets) = posed.inputs(p, self.position, &self.normalizer)?;
-                let pred =
-                    model.forward(self.tensor(features, width), posed.character.adjacency())?;
+                let pred = model.forward(self.tensor(features, width), posed.character.batch())?;
                 let pred: Vec<f32> = pred
                     .into_data()
                     .convert::<f32>()

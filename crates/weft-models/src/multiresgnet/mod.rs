@@ -1,0 +1,265 @@
+//! MultiResGNet (seed 001 §3.3): a multi-resolution graph network that predicts the
+//! per-vertex correction from linear blend skinning to a nonlinear deformation,
+//! `M = M_coarse + W(G; Ψ)` (eq. 3.1), from translation-invariant node features (the
+//! relative skinning descriptor of eq. 3.9 in place of positions).
+//!
+//! Input transform (64, 32; tanh), then two branches on its output `v^[l]`:
+//!
+//! - **local**: one dense module of `m` GAT blocks (16 channels × 8 heads plus a
+//!   self-reinforced stream of β = 1.0, tanhshrink; eq. 3.6), width `32 + m·256`; `m` is
+//!   not given, 6 as thesis-reference M1 recommends;
+//! - **global**: edge-contraction pooling (eq. 3.10–3.11, about half the nodes remain),
+//!   two GAT blocks in sequence on the pooled graph, unpooling (eq. 3.12), and one more
+//!   GAT block on the fine graph, the `f_GATB` of eq. 3.13 (M2).
+//!
+//! The two are concatenated and the output transform (256, 64; tanh) and a last linear
+//! layer give the 3-vector in centimetres (eq. 3.13). Batch normalisation after every
+//! layer but the last (D6). Without the global branch (`global = false`) the network is
+//! Table 3.4's "single resolution" ablation. The pooling's attention has its own
+//! parameters (M3) of the blocks' `F` channels; `score_offset` (M4) is added to its
+//! scores, 0 being the thesis' plain division by `α` in eq. 3.12.
+
+use burn::config::Config;
+use burn::module::Module;
+use burn::nn::{Linear, LinearConfig};
+use burn::tensor::{Device, Tensor};
+use weft_nn::{
+    edge_unpool, Activation, DenseGatModule, DenseGatModuleConfig, EdgePool, EdgePoolConfig,
+    GraphBatch, Mlp, NormedGat,
+};
+
+use crate::error::ModelError;
+use crate::refine::{nn_error as nn, tanh_mlp, PositionFeature, RefineNet};
+
+/// Configuration of [`MultiResGnet`].
+#[derive(Config, Debug, PartialEq)]
+pub struct MultiResGnetConfig {
+    /// Joints of the skeleton `S` (node features are `6 + S` wide).
+    #[config(default = 24)]
+    pub joints: usize,
+    /// What stands in for positions in the node features (§3.3.1: the descriptor).
+    #[config(default = "PositionFeature::Descriptor")]
+    pub position: PositionFeature,
+    /// Influences per vertex of the coarse LBS (§3.3.3.1: at most four).
+    #[config(default = 4)]
+    pub influences: usize,
+    /// Widths of the input transform.
+    #[config(default = "vec![64, 32]")]
+    pub input_widths: Vec<usize>,
+    /// GAT blocks `m` of the local branch's dense module (M1).
+    #[config(default = 6)]
+    pub local_blocks: usize,
+    /// Channels per head `F` of every GAT block and of the pooling's attention.
+    #[config(default = 16)]
+    pub channels: usize,
+    /// Heads `K`.
+    #[config(default = 8)]
+    pub heads: usize,
+    /// β of the self-reinforced stream (§3.3.3.2: 128 of 128 channels), or none.
+    #[config(default = "Some(1.0)")]
+    pub self_reinforced: Option<f64>,
+    /// Batch normalisation after every layer but the last.
+    #[config(default = true)]
+    pub batch_norm: bool,
+    /// σ of the GAT blocks.
+    #[config(default = "Activation::Tanhshrink")]
+    pub activation: Activation,
+    /// The global branch (else the "single resolution" ablation of Table 3.4).
+    #[config(default = true)]
+    pub global: bool,
+    /// GAT blocks on the pooled graph (M2; the `f_GATB` after unpooling comes on top).
+    #[config(default = 2)]
+    pub global_blocks: usize,
+    /// Added to the pooling scores `α` (M4): 0 is the thesis, 0.5 PyG's EdgePool.
+    #[config(default = 0.0)]
+    pub score_offset: f64,
+    /// Widths of the output transform's hidden layers (a last linear layer to 3 follows).
+    #[config(default = "vec![256, 64]")]
+    pub output_widths: Vec<usize>,
+}
+
+impl MultiResGnetConfig {
+    /// Vertices per training patch (§3.3.3.2: "the surrounding 1024 consecutive
+    /// vertices").
+    pub const PATCH: usize = 1024;
+
+    /// The preset `name`: `paper` (§3.3.3.2's widths) or `cpu` (the same shape, narrower:
+    /// 3 local blocks, 8 channels × 4 heads, output (128, 64)), so a tiny dataset trains
+    /// in minutes on two cores.
+    pub fn preset(name: &str) -> Result<Self, ModelError> {
+        match name {
+            "paper" => Ok(Self::new()),
+            "cpu" => Ok(Self::new()
+                .with_local_blocks(3)
+                .with_channels(8)
+                .with_heads(4)
+                .with_output_widths(vec![128, 64])),
+            other => Err(ModelError::Config(format!(
+                "unknown preset `{other}`; expected cpu or paper"
+            ))),
+        }
+    }
+
+    /// Checks the values; errors name the field.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let global_blocks = if self.global { self.global_blocks } else { 1 };
+        for (field, v) in [
+            ("joints", self.joints),
+            ("influences", self.influences),
+            ("local_blocks", self.local_blocks),
+            ("channels", self.channels),
+            ("heads", self.heads),
+            ("global_blocks", global_blocks),
+        ] {
+            if v == 0 {
+                return Err(ModelError::Config(format!(
+                    "{field} = 0; expected at least 1"
+                )));
+            }
+        }
+        if self.input_widths.is_empty() || self.input_widths.contains(&0) {
+            return Err(ModelError::Config(
+                "input_widths needs at least one layer and no width may be 0".into(),
+            ));
+        }
+        if self.output_widths.contains(&0) {
+            return Err(ModelError::Config(
+                "output_widths: no width may be 0".into(),
+            ));
+        }
+        if let Some(b) = self.self_reinforced {
+            if !(b.is_finite() && b > 0.0) {
+                return Err(ModelError::Config(format!(
+                    "self_reinforced = {b}; expected a positive β or none"
+                )));
+            }
+        }
+        if !(self.score_offset.is_finite() && self.score_offset >= 0.0) {
+            return Err(ModelError::Config(format!(
+                "score_offset = {}; expected a finite value ≥ 0",
+                self.score_offset
+            )));
+        }
+        Ok(())
+    }
+
+    /// `blocks` GAT blocks of this network's widths reading `d_input` features, densely
+    /// connected or in sequence.
+    fn module(&self, d_input: usize, blocks: usize, dense: bool) -> DenseGatModuleConfig {
+        DenseGatModuleConfig::new(d_input, blocks, self.channels)
+            .with_heads(self.heads)
+            .with_self_reinforced(self.self_reinforced)
+            .with_activation(self.activation)
+            .with_batch_norm(self.batch_norm)
+            .with_dense(dense)
+    }
+
+    /// Builds the network.
+    pub fn init(&self, device: &Device) -> Result<MultiResGnet, ModelError> {
+        self.validate()?;
+        let input = tanh_mlp(6 + self.joints, &self.input_widths, self.batch_norm, device)?;
+        let d = input.output_width();
+        let local = self
+            .module(d, self.local_blocks, true)
+            .init(device)
+            .map_err(nn)?;
+        let mut fused = local.output_width();
+        let global = if self.global {
+            let pool = EdgePoolConfig::new(d)
+                .with_channels(self.channels)
+                .with_score_offset(self.score_offset)
+                .init(device)
+                .map_err(nn)?;
+            let blocks = self.module(d, self.global_blocks, false);
+            let coarse = blocks.init(device).map_err(nn)?;
+            let after = blocks
+                .block(blocks.output_width())
+                .init(device)
+                .map_err(nn)?;
+            fused += after.output_width();
+            Some(GlobalBranch {
+                pool,
+                coarse,
+                after,
+            })
+        } else {
+            None
+        };
+        let hidden = if self.output_widths.is_empty() {
+            None
+        } else {
+            Some(tanh_mlp(
+                fused,
+                &self.output_widths,
+                self.batch_norm,
+                device,
+            )?)
+        };
+        let d_head = hidden.as_ref().map_or(fused, Mlp::output_width);
+        Ok(MultiResGnet {
+            input,
+            local,
+            global,
+            hidden,
+            head: LinearConfig::new(d_head, 3).init(device),
+        })
+    }
+}
+
+/// The global branch: pool, GAT blocks on the pooled graph, unpool, `f_GATB`.
+#[derive(Module, Debug)]
+pub struct GlobalBranch {
+    /// Edge-contraction pooling of the input transform's output (eq. 3.10–3.11).
+    pub pool: EdgePool,
+    /// GAT blocks in sequence on the pooled graph.
+    pub coarse: DenseGatModule,
+    /// The GAT block after unpooling (eq. 3.13's `f_GATB`).
+    pub after: NormedGat,
+}
+
+impl GlobalBranch {
+    /// `x`: `[N, d]` on `graph`; returns `[N, after.output_width()]`.
+    fn forward(&self, x: Tensor<2>, graph: &GraphBatch) -> Result<Tensor<2>, ModelError> {
+        let pooled = self.pool.forward(x, graph).map_err(nn)?;
+        let coarse = pooled.clusters.coarse.adjacency();
+        let g = self.coarse.forward(pooled.features, coarse).map_err(nn)?;
+        let g = edge_unpool(g, &pooled.clusters).map_err(nn)?;
+        self.after.forward(g, graph.adjacency()).map_err(nn)
+    }
+}
+
+/// The MultiResGNet network; see the module documentation.
+#[derive(Module, Debug)]
+pub struct MultiResGnet {
+    /// Input transform.
+    pub input: Mlp,
+    /// The local branch's dense module.
+    pub local: DenseGatModule,
+    /// The global branch, or none (single resolution).
+    pub global: Option<GlobalBranch>,
+    /// Output transform's hidden layers.
+    pub hidden: Option<Mlp>,
+    /// The last linear layer to the 3-vector (no normalisation, no σ).
+    pub head: Linear,
+}
+
+impl RefineNet for MultiResGnet {
+    fn forward(&self, x: Tensor<2>, graph: &GraphBatch) -> Result<Tensor<2>, ModelError> {
+        let v = self.input.forward(x).map_err(nn)?;
+        let local = self
+            .local
+            .forward(v.clone(), graph.adjacency())
+            .map_err(nn)?;
+        let mut h = match &self.global {
+            Some(global) => Tensor::cat(vec![local, global.forward(v, graph)?], 1),
+            None => local,
+        };
+        if let Some(hidden) = &self.hidden {
+            h = hidden.forward(h).map_err(nn)?;
+        }
+        Ok(self.head.forward(h))
+    }
+}
+
+#[cfg(test)]
+mod tests;
