@@ -160,7 +160,8 @@ impl DenseGatsBench {
             .map_err(BenchError::stage("pose inputs"))?
             .features;
         let x = Tensor::<2>::from_data(TensorData::new(features, [n, 6 + s]), &device);
-        let adjacency = character.adjacency();
+        let batch = character.batch();
+        let adjacency = batch.adjacency();
         let sync = |t: Tensor<2>| {
             let _ = t.into_data();
         };
@@ -198,11 +199,11 @@ impl DenseGatsBench {
         let output_mlp_ms = try_median_ms(reps, || output(h.clone()).map(sync))
             .map_err(BenchError::stage("output transform"))?;
         let network_ms =
-            try_median_ms(reps, || net.forward(x.clone(), adjacency).map(sync)).map_err(nn)?;
+            try_median_ms(reps, || net.forward(x.clone(), batch).map(sync)).map_err(nn)?;
         let frame_ms = try_median_ms(reps, || {
             let input = character.pose_input(&pose, [0.0; 3], PositionFeature::Position)?;
             let x = Tensor::<2>::from_data(TensorData::new(input.features, [n, 6 + s]), &device);
-            net.forward(x, adjacency).map(sync)
+            net.forward(x, batch).map(sync)
         })
         .map_err(BenchError::stage("frame"))?;
         let parameters = burn::module::Module::num_params(&net);

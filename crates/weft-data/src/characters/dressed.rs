@@ -132,7 +132,7 @@ pub fn dress(
             .map_err(|e| garment_err(&format!("weights of the {}", kind.name()), &e))?;
         dense.extend_from_slice(w.as_slice());
         let base = mesh.positions.len() as u32;
-        parts.extend(std::iter::repeat_n(k as u32 + 1, layer.positions.len()));
+        parts.resize(parts.len() + layer.positions.len(), k as u32 + 1);
         mesh.positions.extend_from_slice(&layer.positions);
         mesh.faces
             .extend(layer.faces.iter().map(|f| f.map(|v| v + base)));

@@ -25,6 +25,7 @@ use crate::deformer::{Clip, Deformer, Frames};
 use crate::densegats::DenseGatsConfig;
 use crate::error::ModelError;
 use crate::kind::ModelKind;
+use crate::multiresgnet::MultiResGnetConfig;
 use crate::run::{latest_checkpoint, read_run_config, RunLayout};
 
 /// A trained refinement network ready to run; see the module documentation.
@@ -79,6 +80,13 @@ impl RefinePredictor {
             match header.model {
                 ModelKind::DenseGats => {
                     let cfg: DenseGatsConfig = model.try_into().map_err(parse)?;
+                    cfg.validate()
+                        .map_err(|e| run_err(&path, format!("[model]: {e}")))?;
+                    let net = load_record(cfg.init(&device)?, &checkpoint)?;
+                    (Box::new(net), cfg.position, cfg.influences, cfg.joints)
+                }
+                ModelKind::MultiResGnet => {
+                    let cfg: MultiResGnetConfig = model.try_into().map_err(parse)?;
                     cfg.validate()
                         .map_err(|e| run_err(&path, format!("[model]: {e}")))?;
                     let net = load_record(cfg.init(&device)?, &checkpoint)?;
@@ -143,7 +151,7 @@ impl RefinePredictor {
         );
         let delta: Vec<f32> = self
             .net
-            .forward(x, character.adjacency())?
+            .forward(x, character.batch())?
             .into_data()
             .convert::<f32>()
             .try_into_vec::<f32>()

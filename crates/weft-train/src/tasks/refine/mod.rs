@@ -1,11 +1,13 @@
 //! Training a learned refinement of skinning (seed 001 ch. 3: DenseGATs, MultiResGNet)
 //! on a character dataset (`weft data characters`).
 //!
-//! - Items are (training character, pose, patch): each pose is cut into
-//!   `ceil(N / patch)` connected patches grown from seeded vertices (thesis-reference
-//!   D5/M5: "the surrounding 1024 consecutive vertices each time until traversing the
-//!   entire meshes"), so an epoch covers every mesh about once per pose. The seed vertex
-//!   is a function of the run seed and the item, so a resumed run sees the same patches.
+//! - Each pose of each training character is cut into `ceil(N / patch)` connected
+//!   patches grown from seeded vertices (thesis-reference D5/M5: "the surrounding 1024
+//!   consecutive vertices each time until traversing the entire meshes"), so an epoch
+//!   covers every mesh about once per pose; the patches are shuffled by the run seed and
+//!   grouped `patches` to an item, one forward pass over their disjoint union (the
+//!   thesis's batch). Seed vertices and groups are functions of the run seed, so a
+//!   resumed run sees the same patches.
 //! - The node features of a pose are computed on the whole coarse mesh (normals need
 //!   every neighbour) and gathered for the patch; a z-score normaliser fitted on the
 //!   training characters before the first step (§3.3: "normalized using the mean and
@@ -153,8 +155,9 @@ pub struct RefineTask<M> {
     seed: u64,
     train: Vec<Posed>,
     validation: Vec<Posed>,
-    /// `(character, pose, patch)` per item.
-    items: Vec<(usize, usize, usize)>,
+    /// `(character, pose, patch)` of every patch of an epoch, in a seeded order, grouped
+    /// `patches` to an item.
+    groups: Vec<Vec<(usize, usize, usize)>>,
     _model: std::marker::PhantomData<M>,
 }
 
@@ -178,6 +181,12 @@ impl<M> RefineTask<M> {
                 items.extend((0..patches).map(|k| (c, p, k)));
             }
         }
+        // A seeded shuffle, so a group mixes characters, poses and regions.
+        let mut rng = SplitMix64::new(seed ^ 0x5041_5443_4845_5321);
+        for i in (1..items.len()).rev() {
+            items.swap(i, rng.below(i + 1));
+        }
+        let groups = items.chunks(training.patches).map(<[_]>::to_vec).collect();
         Ok(RefineTask {
             training: training.clone(),
             position,
@@ -186,7 +195,7 @@ impl<M> RefineTask<M> {
             seed,
             train,
             validation,
-            items,
+            groups,
             _model: std::marker::PhantomData,
         })
     }
@@ -228,7 +237,7 @@ where
     type Stage = ();
 
     fn item_count(&self) -> usize {
-        self.items.len()
+        self.groups.len()
     }
 
     fn terms(&self, _: &()) -> Vec<(Term, f64)> {
@@ -236,21 +245,27 @@ where
     }
 
     fn losses(&mut self, model: &M, item: usize, _: &[Term]) -> Result<Vec<Tensor<1>>> {
-        let (c, p, k) = self.items[item];
-        let posed = &self.train[c];
-        let n = posed.character.vertex_count();
-        let mut rng = SplitMix64::new(
-            self.seed ^ (item as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ k as u64,
-        );
-        let seed_vertex = rng.below(n);
-        let patch =
-            Patch::grow(posed.character.graph(), seed_vertex, self.training.patch).map_err(nn)?;
-        let (features, _, targets) = posed.inputs(p, self.position, &self.normalizer)?;
-        let width = posed.character.feature_width();
-        let x = self.tensor(patch.gather(&features, width).map_err(nn)?, width);
-        let y = self.tensor(patch.gather(&targets, 3).map_err(nn)?, 3);
-        let pred = model.forward(x, &GraphBatch::single(patch.graph()))?;
-        Ok(vec![(pred - y).powi_scalar(2).mean()])
+        let (mut xs, mut ys, mut patches) = (Vec::new(), Vec::new(), Vec::new());
+        for &(c, p, k) in &self.groups[item] {
+            let posed = &self.train[c];
+            let n = posed.character.vertex_count();
+            let mut rng = SplitMix64::new(
+                self.seed
+                    ^ (((c as u64) << 40) | ((p as u64) << 20) | k as u64)
+                        .wrapping_mul(0x9e37_79b9_7f4a_7c15),
+            );
+            let patch = Patch::grow(posed.character.graph(), rng.below(n), self.training.patch)
+                .map_err(nn)?;
+            let (features, _, targets) = posed.inputs(p, self.position, &self.normalizer)?;
+            let width = posed.character.feature_width();
+            xs.push(self.tensor(patch.gather(&features, width).map_err(nn)?, width));
+            ys.push(self.tensor(patch.gather(&targets, 3).map_err(nn)?, 3));
+            patches.push(patch);
+        }
+        let graphs: Vec<&weft_mesh::Graph> = patches.iter().map(Patch::graph).collect();
+        let batch = GraphBatch::new(&graphs).map_err(nn)?;
+        let pred = model.forward(Tensor::cat(xs, 0), &batch)?;
+        Ok(vec![(pred - Tensor::cat(ys, 0)).powi_scalar(2).mean()])
     }
 
     fn validate(&mut self, model: &M) -> Result<Metrics> {
