@@ -89,6 +89,12 @@ fn characters_train_evaluate_and_animate() {
     let table = root.join("table");
     let o = weft(&["eval", s(&run), "--data", s(&data), "--out", s(&table)]);
     assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        std::fs::metadata(table.join("characters.png"))
+            .unwrap()
+            .len()
+            > 1000
+    );
     let md = std::fs::read_to_string(table.join("characters.md")).unwrap();
     for row in [
         "LBS (8 influences)",

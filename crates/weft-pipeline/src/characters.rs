@@ -16,7 +16,10 @@ use serde::Serialize;
 use weft_body::Skinning;
 use weft_data::characters::CharacterSet;
 use weft_data::Split;
+use weft_eval::metrics::vertex_errors_mm;
+use weft_eval::pictures::{comparison_sheet, MethodFrames};
 use weft_models::refine::{Character, RefinePredictor};
+use weft_render::Image;
 use weft_train::tasks::refine::Posed;
 
 use crate::error::{stage, PipelineError};
@@ -148,13 +151,16 @@ impl Method {
 }
 
 /// Evaluates `runs` (each named by its directory name) and the LBS/DQS baselines on the
-/// `split` characters of the dataset in `data`, every pose moved by `translation`.
+/// `split` characters of the dataset in `data`, every pose moved by `translation`; with
+/// the table, a picture of the split's first character in the two poses where LBS is
+/// worst: the truth, then every method coloured by its distance to the truth on one
+/// scale.
 pub fn evaluate_characters(
     runs: &[PathBuf],
     data: &Path,
     split: Split,
     translation: [f64; 3],
-) -> Result<CharacterTable, PipelineError> {
+) -> Result<(CharacterTable, Image), PipelineError> {
     let set = CharacterSet::open(data)?;
     let records = set.records(split);
     if records.is_empty() {
@@ -190,11 +196,30 @@ pub fn evaluate_characters(
         .iter()
         .map(|_| (Vec::new(), Accumulator::new(), 0.0, 0))
         .collect();
-    for r in records {
+    // The first character's frames of every method, for the picture.
+    let mut shown: Vec<Vec<Vec<[f32; 3]>>> = methods.iter().map(|_| Vec::new()).collect();
+    let mut shown_truth: Vec<Vec<[f32; 3]>> = Vec::new();
+    let mut shown_faces = Vec::new();
+    for (index, r) in records.iter().enumerate() {
         let data = set.load(r)?;
         let posed =
             Posed::new(&r.id, data, 8).map_err(stage(&format!("preparing character {}", r.id)))?;
-        for (m, (rows, total, seconds, frames)) in methods.iter().zip(&mut out) {
+        if index == 0 {
+            shown_faces = posed.data.faces.clone();
+            shown_truth = posed
+                .data
+                .truth
+                .iter()
+                .map(|t| {
+                    t.iter()
+                        .map(|p| std::array::from_fn(|k| p[k] + translation[k] as f32))
+                        .collect()
+                })
+                .collect();
+        }
+        for ((m, (rows, total, seconds, frames)), kept) in
+            methods.iter().zip(&mut out).zip(&mut shown)
+        {
             let character = Character::new(posed.character.rig().clone(), m.influences())?;
             let mut acc = Accumulator::new();
             for (pose, truth) in posed.data.poses.iter().zip(&posed.data.truth) {
@@ -212,6 +237,9 @@ pub fn evaluate_characters(
                     }
                 };
                 acc.add(&predicted, truth, translation);
+                if index == 0 {
+                    kept.push(predicted.iter().map(|p| p.map(|x| x as f32)).collect());
+                }
             }
             rows.push(CharacterErrors {
                 id: r.id.clone(),
@@ -224,7 +252,40 @@ pub fn evaluate_characters(
             total.merge(&acc);
         }
     }
-    Ok(CharacterTable {
+    // The two poses where LBS (the first method) is worst on average.
+    let lbs = &shown[0];
+    let mut order: Vec<(f64, usize)> = lbs
+        .iter()
+        .zip(&shown_truth)
+        .enumerate()
+        .map(|(t, (p, g))| {
+            let e = vertex_errors_mm(p, g)
+                .map(|e| e.iter().sum::<f64>())
+                .unwrap_or(0.0);
+            (e, t)
+        })
+        .collect();
+    order.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let frames: Vec<usize> = order.iter().take(2).map(|&(_, t)| t).collect();
+    let names: Vec<String> = methods.iter().map(Method::name).collect();
+    let columns: Vec<MethodFrames<'_>> = names
+        .iter()
+        .zip(&shown)
+        .map(|(name, frames)| MethodFrames { name, frames })
+        .collect();
+    let picture = comparison_sheet(
+        &shown_faces,
+        &shown_truth,
+        &columns,
+        None,
+        &frames,
+        420,
+        &format!(
+            "{}: truth, then each method coloured by its distance to the truth",
+            records[0].id
+        ),
+    )?;
+    let table = CharacterTable {
         data: data.to_path_buf(),
         split: split.name().to_string(),
         translation,
@@ -241,7 +302,8 @@ pub fn evaluate_characters(
                 ms_per_frame: (frames > 0).then(|| 1000.0 * seconds / frames as f64),
             })
             .collect(),
-    })
+    };
+    Ok((table, picture))
 }
 
 impl CharacterTable {

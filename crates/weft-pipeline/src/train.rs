@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use weft_data::characters::CharacterSet;
 use weft_data::Split;
 use weft_models::multilevel::Multilevel;
-use weft_models::refine::{PositionFeature, RefineNet};
+use weft_models::refine::RefineConfig;
 use weft_models::ModelKind;
 use weft_nn::backend::{cpu_autodiff, seeded};
 use weft_train::run_config::{ModelSettings, RunConfig, TaskSettings};
@@ -83,11 +83,11 @@ pub fn train_run(spec: &TrainSpec, log: &mut dyn FnMut(&str)) -> Result<Outcome,
         }
         ModelKind::DenseGats => {
             let cfg: DenseGatsRun = resolve(spec)?;
-            train_refine(&cfg, cfg.model.position, cfg.model.influences, spec, log)
+            train_refine(&cfg, spec, log)
         }
         ModelKind::MultiResGnet => {
             let cfg: MultiResGnetRun = resolve(spec)?;
-            train_refine(&cfg, cfg.model.position, cfg.model.influences, spec, log)
+            train_refine(&cfg, spec, log)
         }
         _ => unreachable!("refused by check_implemented"),
     }
@@ -156,40 +156,16 @@ pub fn train_multilevel(
     Ok(outcome)
 }
 
-/// A refinement model's settings the pipeline needs besides [`ModelSettings`]: building
-/// the network.
-pub trait RefineModel: ModelSettings {
-    /// The network.
-    type Net: weft_nn::burn::module::Module + Clone + RefineNet;
-    /// Builds it on `device`.
-    fn build(&self, device: &weft_nn::burn::tensor::Device) -> Result<Self::Net, PipelineError>;
-}
-
-impl RefineModel for weft_models::densegats::DenseGatsConfig {
-    type Net = weft_models::densegats::DenseGats;
-    fn build(&self, device: &weft_nn::burn::tensor::Device) -> Result<Self::Net, PipelineError> {
-        Ok(self.init(device)?)
-    }
-}
-
-impl RefineModel for weft_models::multiresgnet::MultiResGnetConfig {
-    type Net = weft_models::multiresgnet::MultiResGnet;
-    fn build(&self, device: &weft_nn::burn::tensor::Device) -> Result<Self::Net, PipelineError> {
-        Ok(self.init(device)?)
-    }
-}
-
 /// Trains a refinement model (DenseGATs, MultiResGNet) of `cfg` on the character
 /// dataset in `spec.data` into `spec.out`: loads the training and validation
 /// characters, fits the feature normaliser on the training ones (saved in the run
 /// directory before the first step), then runs the loop.
-pub fn train_refine<M: RefineModel>(
+pub fn train_refine<M: ModelSettings + RefineConfig>(
     cfg: &RunConfig<M, RefineTraining>,
-    position: PositionFeature,
-    influences: usize,
     spec: &TrainSpec,
     log: &mut dyn FnMut(&str),
 ) -> Result<Outcome, PipelineError> {
+    let (position, influences) = (cfg.model.position(), cfg.model.influences());
     let set = CharacterSet::open(&spec.data).map_err(stage(&format!(
         "opening the character dataset {}",
         spec.data.display()

@@ -126,6 +126,12 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let Some(data) = &args.data else {
         bail!("--data DIR is required: the dataset to evaluate on (the run does not record it)");
     };
+    if data
+        .join(weft_data::characters::CHARACTER_MANIFEST)
+        .is_file()
+    {
+        return run_characters(args, data);
+    }
     if args.runs.len() > 1 && !args.compare {
         bail!(
             "{} runs given; pass --compare to evaluate several runs as one table",
@@ -214,9 +220,9 @@ pub fn run(args: &EvalArgs) -> Result<()> {
 }
 
 /// A character dataset: every run (DenseGATs, MultiResGNet) and the LBS/DQS baselines as
-/// seed 001's tables, written to --out (characters.md, characters.json).
+/// seed 001's tables, written to --out (characters.md, characters.json, characters.png).
 fn run_characters(args: &EvalArgs, data: &Path) -> Result<()> {
-    let table = weft_pipeline::characters::evaluate_characters(
+    let (table, picture) = weft_pipeline::characters::evaluate_characters(
         &args.runs,
         data,
         args.split,
@@ -233,6 +239,7 @@ fn run_characters(args: &EvalArgs, data: &Path) -> Result<()> {
         &args.out.join("characters.json"),
         &serde_json::to_string_pretty(&table)?,
     )?;
+    picture.write_png(&args.out.join("characters.png"))?;
     if args.json {
         emit(&serde_json::to_string_pretty(&table)?)
     } else {

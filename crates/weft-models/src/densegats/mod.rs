@@ -7,7 +7,7 @@
 //! eq. 3.2–3.6) with one transition block between modules, output transform (512, 128,
 //! tanh) and a last linear layer to the 3-vector; batch normalisation after every layer
 //! but the last (thesis-reference D6). The same config expresses the ablations of
-//! Table 3.3: without the self stream (`self_reinforced = none`), without dense
+//! Table 3.3: without the self stream (`self_reinforced = 0`), without dense
 //! connections (`dense = false`), and the original GAT and NeuroSkinning-style networks
 //! (one module of 4 or 3 plain blocks, no self stream, ELU; D10).
 //!
@@ -51,9 +51,10 @@ pub struct DenseGatsConfig {
     /// Heads `K`.
     #[config(default = 8)]
     pub heads: usize,
-    /// β of the self-reinforced stream, or none (the ablation).
-    #[config(default = "Some(0.125)")]
-    pub self_reinforced: Option<f64>,
+    /// β of the self-reinforced stream; 0: none (the ablation; a number, not an
+    /// option, so a config file can say it).
+    #[config(default = 0.125)]
+    pub self_reinforced: f64,
     /// Dense connections inside modules (else chained).
     #[config(default = true)]
     pub dense: bool,
@@ -111,10 +112,11 @@ impl DenseGatsConfig {
                 "input_widths needs at least one layer and no width may be 0".into(),
             ));
         }
-        if let Some(b) = self.self_reinforced {
-            if !(b.is_finite() && b > 0.0) {
+        {
+            let b = self.self_reinforced;
+            if !(b.is_finite() && b >= 0.0) {
                 return Err(ModelError::Config(format!(
-                    "self_reinforced = {b}; expected a positive β or none"
+                    "self_reinforced = {b}; expected β ≥ 0 (0: no self stream)"
                 )));
             }
         }
@@ -124,7 +126,7 @@ impl DenseGatsConfig {
     fn module(&self, d_input: usize) -> DenseGatModuleConfig {
         DenseGatModuleConfig::new(d_input, self.blocks, self.channels)
             .with_heads(self.heads)
-            .with_self_reinforced(self.self_reinforced)
+            .with_self_reinforced((self.self_reinforced > 0.0).then_some(self.self_reinforced))
             .with_activation(self.activation)
             .with_batch_norm(self.batch_norm)
             .with_dense(self.dense)
@@ -233,13 +235,13 @@ mod tests {
         let device = cpu_autodiff();
         let plain = DenseGatsConfig::new()
             .with_dense(false)
-            .with_self_reinforced(None)
+            .with_self_reinforced(0.0)
             .init(&device)
             .unwrap();
         assert_eq!(plain.modules[0].output_width(), 64);
         assert!(DenseGatsConfig::new().with_blocks(0).init(&device).is_err());
         assert!(DenseGatsConfig::new()
-            .with_self_reinforced(Some(-1.0))
+            .with_self_reinforced(-1.0)
             .validate()
             .is_err());
         assert!(DenseGatsConfig::preset("huge").is_err());
@@ -247,5 +249,29 @@ mod tests {
             .unwrap()
             .init(&device)
             .unwrap();
+    }
+}
+
+impl crate::refine::RefineConfig for DenseGatsConfig {
+    type Net = DenseGats;
+
+    fn check(&self) -> Result<(), ModelError> {
+        self.validate()
+    }
+
+    fn build(&self, device: &Device) -> Result<DenseGats, ModelError> {
+        self.init(device)
+    }
+
+    fn position(&self) -> PositionFeature {
+        self.position
+    }
+
+    fn influences(&self) -> usize {
+        self.influences
+    }
+
+    fn joints(&self) -> usize {
+        self.joints
     }
 }

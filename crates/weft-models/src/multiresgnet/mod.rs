@@ -263,3 +263,27 @@ impl RefineNet for MultiResGnet {
 
 #[cfg(test)]
 mod tests;
+
+impl crate::refine::RefineConfig for MultiResGnetConfig {
+    type Net = MultiResGnet;
+
+    fn check(&self) -> Result<(), ModelError> {
+        self.validate()
+    }
+
+    fn build(&self, device: &Device) -> Result<MultiResGnet, ModelError> {
+        self.init(device)
+    }
+
+    fn position(&self) -> PositionFeature {
+        self.position
+    }
+
+    fn influences(&self) -> usize {
+        self.influences
+    }
+
+    fn joints(&self) -> usize {
+        self.joints
+    }
+}

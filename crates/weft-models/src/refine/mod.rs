@@ -43,6 +43,24 @@ pub fn read_normalizer(path: &Path) -> Result<FeatureNormalizer, ModelError> {
 /// Centimetres per metre: refinement networks predict corrections in centimetres.
 pub const CM_PER_M: f64 = 100.0;
 
+/// A refinement model's configuration: what building, loading and feeding its network
+/// needs, so the predictor, the training pipeline and the benches treat DenseGATs and
+/// MultiResGNet alike.
+pub trait RefineConfig: serde::de::DeserializeOwned {
+    /// The network.
+    type Net: burn::module::Module + Clone + RefineNet + Send + Sync + 'static;
+    /// Checks the values; errors name the field.
+    fn check(&self) -> Result<(), ModelError>;
+    /// Builds the network on `device`.
+    fn build(&self, device: &Device) -> Result<Self::Net, ModelError>;
+    /// What stands in for positions in the node features.
+    fn position(&self) -> PositionFeature;
+    /// Influences per vertex of the coarse LBS.
+    fn influences(&self) -> usize;
+    /// Joints of the skeleton (node features are `6 + S` wide).
+    fn joints(&self) -> usize;
+}
+
 /// A refinement network: normalised node features `[N, 6 + S]` on the graph `graph` (a
 /// whole mesh or a patch, as a one-graph [`GraphBatch`]: its adjacency for the GAT
 /// blocks, the graph itself for MultiResGNet's pooling) to per-vertex corrections

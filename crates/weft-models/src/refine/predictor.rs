@@ -20,7 +20,7 @@ use weft_mesh::TriMesh;
 use weft_nn::FeatureNormalizer;
 
 use super::character::{Character, CharacterRig, PositionFeature};
-use super::{read_normalizer, RefineNet, CM_PER_M, NORMALIZER_FILE};
+use super::{read_normalizer, RefineConfig, RefineNet, CM_PER_M, NORMALIZER_FILE};
 use crate::deformer::{Clip, Deformer, Frames};
 use crate::densegats::DenseGatsConfig;
 use crate::error::ModelError;
@@ -62,6 +62,36 @@ fn load_record<M: Module>(fresh: M, checkpoint: &Path) -> Result<M, ModelError> 
         })
 }
 
+/// The network of `[model]` (`path` names config.toml in errors) with the parameters
+/// of `checkpoint`, and what it reads.
+fn load_net<C: RefineConfig>(
+    model: toml::Table,
+    path: &Path,
+    checkpoint: &Path,
+    device: &Device,
+) -> Result<
+    (
+        Box<dyn RefineNet + Send + Sync>,
+        PositionFeature,
+        usize,
+        usize,
+    ),
+    ModelError,
+> {
+    let cfg: C = model
+        .try_into()
+        .map_err(|e: toml::de::Error| run_err(path, format!("[model]: {e}")))?;
+    cfg.check()
+        .map_err(|e| run_err(path, format!("[model]: {e}")))?;
+    let net = load_record(cfg.build(device)?, checkpoint)?;
+    Ok((
+        Box::new(net),
+        cfg.position(),
+        cfg.influences(),
+        cfg.joints(),
+    ))
+}
+
 impl RefinePredictor {
     /// Loads the run in `dir` on the CPU. Errors name the file: a run of another model
     /// kind, a `[model]` table that does not validate, a checkpoint that does not fit, a
@@ -75,30 +105,20 @@ impl RefinePredictor {
         };
         let device = weft_nn::backend::cpu();
         let checkpoint = latest_checkpoint(dir)?;
-        let parse = |e: toml::de::Error| run_err(&path, format!("[model]: {e}"));
-        let (net, position, influences, joints): (Box<dyn RefineNet + Send + Sync>, _, _, _) =
-            match header.model {
-                ModelKind::DenseGats => {
-                    let cfg: DenseGatsConfig = model.try_into().map_err(parse)?;
-                    cfg.validate()
-                        .map_err(|e| run_err(&path, format!("[model]: {e}")))?;
-                    let net = load_record(cfg.init(&device)?, &checkpoint)?;
-                    (Box::new(net), cfg.position, cfg.influences, cfg.joints)
-                }
-                ModelKind::MultiResGnet => {
-                    let cfg: MultiResGnetConfig = model.try_into().map_err(parse)?;
-                    cfg.validate()
-                        .map_err(|e| run_err(&path, format!("[model]: {e}")))?;
-                    let net = load_record(cfg.init(&device)?, &checkpoint)?;
-                    (Box::new(net), cfg.position, cfg.influences, cfg.joints)
-                }
-                other => {
-                    return Err(run_err(
-                        &path,
-                        format!("a run of model `{other}`, not a refinement model (densegats, multiresgnet)"),
-                    ))
-                }
-            };
+        let (net, position, influences, joints) = match header.model {
+            ModelKind::DenseGats => {
+                load_net::<DenseGatsConfig>(model, &path, &checkpoint, &device)?
+            }
+            ModelKind::MultiResGnet => {
+                load_net::<MultiResGnetConfig>(model, &path, &checkpoint, &device)?
+            }
+            other => return Err(run_err(
+                &path,
+                format!(
+                    "a run of model `{other}`, not a refinement model (densegats, multiresgnet)"
+                ),
+            )),
+        };
         let normalizer = read_normalizer(&dir.join(NORMALIZER_FILE))?;
         if normalizer.width() != 6 + joints {
             return Err(run_err(
