@@ -199,6 +199,30 @@ impl RefineNet for DenseGats {
     }
 }
 
+impl crate::refine::RefineConfig for DenseGatsConfig {
+    type Net = DenseGats;
+
+    fn check(&self) -> Result<(), ModelError> {
+        self.validate()
+    }
+
+    fn build(&self, device: &Device) -> Result<DenseGats, ModelError> {
+        self.init(device)
+    }
+
+    fn position(&self) -> PositionFeature {
+        self.position
+    }
+
+    fn influences(&self) -> usize {
+        self.influences
+    }
+
+    fn joints(&self) -> usize {
+        self.joints
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -249,29 +273,5 @@ mod tests {
             .unwrap()
             .init(&device)
             .unwrap();
-    }
-}
-
-impl crate::refine::RefineConfig for DenseGatsConfig {
-    type Net = DenseGats;
-
-    fn check(&self) -> Result<(), ModelError> {
-        self.validate()
-    }
-
-    fn build(&self, device: &Device) -> Result<DenseGats, ModelError> {
-        self.init(device)
-    }
-
-    fn position(&self) -> PositionFeature {
-        self.position
-    }
-
-    fn influences(&self) -> usize {
-        self.influences
-    }
-
-    fn joints(&self) -> usize {
-        self.joints
     }
 }

@@ -261,9 +261,6 @@ impl RefineNet for MultiResGnet {
     }
 }
 
-#[cfg(test)]
-mod tests;
-
 impl crate::refine::RefineConfig for MultiResGnetConfig {
     type Net = MultiResGnet;
 
@@ -287,3 +284,6 @@ impl crate::refine::RefineConfig for MultiResGnetConfig {
         self.joints
     }
 }
+
+#[cfg(test)]
+mod tests;

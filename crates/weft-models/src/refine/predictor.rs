@@ -112,12 +112,14 @@ impl RefinePredictor {
             ModelKind::MultiResGnet => {
                 load_net::<MultiResGnetConfig>(model, &path, &checkpoint, &device)?
             }
-            other => return Err(run_err(
-                &path,
-                format!(
+            other => {
+                return Err(run_err(
+                    &path,
+                    format!(
                     "a run of model `{other}`, not a refinement model (densegats, multiresgnet)"
                 ),
-            )),
+                ))
+            }
         };
         let normalizer = read_normalizer(&dir.join(NORMALIZER_FILE))?;
         if normalizer.width() != 6 + joints {
