@@ -20,9 +20,9 @@ use weft_eval::metrics::vertex_errors_mm;
 use weft_eval::pictures::{comparison_sheet, MethodFrames};
 use weft_models::refine::{Character, RefinePredictor};
 use weft_render::Image;
-use weft_train::tasks::refine::Posed;
+use weft_train::tasks::refine::rig_of;
 
-use crate::error::{stage, PipelineError};
+use crate::error::PipelineError;
 
 /// Upper edges of the histogram bins, cm (the last bin holds everything above 2 cm).
 pub const HISTOGRAM_EDGES_CM: [f64; 8] = [0.05, 0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 2.0];
@@ -202,12 +202,10 @@ pub fn evaluate_characters(
     let mut shown_faces = Vec::new();
     for (index, r) in records.iter().enumerate() {
         let data = set.load(r)?;
-        let posed =
-            Posed::new(&r.id, data, 8).map_err(stage(&format!("preparing character {}", r.id)))?;
+        let rig = rig_of(&data);
         if index == 0 {
-            shown_faces = posed.data.faces.clone();
-            shown_truth = posed
-                .data
+            shown_faces = data.faces.clone();
+            shown_truth = data
                 .truth
                 .iter()
                 .map(|t| {
@@ -220,9 +218,9 @@ pub fn evaluate_characters(
         for ((m, (rows, total, seconds, frames)), kept) in
             methods.iter().zip(&mut out).zip(&mut shown)
         {
-            let character = Character::new(posed.character.rig().clone(), m.influences())?;
+            let character = Character::new(rig.clone(), m.influences())?;
             let mut acc = Accumulator::new();
-            for (pose, truth) in posed.data.poses.iter().zip(&posed.data.truth) {
+            for (pose, truth) in data.poses.iter().zip(&data.truth) {
                 let predicted = match m {
                     Method::Baseline(skinning, _) => {
                         let t = character.transforms(pose, translation)?;
@@ -244,7 +242,7 @@ pub fn evaluate_characters(
             rows.push(CharacterErrors {
                 id: r.id.clone(),
                 vertices: character.vertex_count(),
-                poses: posed.data.poses.len(),
+                poses: data.poses.len(),
                 mean_cm: acc.mean(),
                 max_cm: acc.max,
                 min_cm: acc.min,

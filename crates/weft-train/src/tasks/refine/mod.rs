@@ -65,24 +65,28 @@ pub struct Posed {
     pub data: CharacterData,
 }
 
+/// The rig of a character file, as the models read it.
+pub fn rig_of(data: &CharacterData) -> CharacterRig {
+    CharacterRig {
+        mesh: weft_mesh::TriMesh {
+            positions: data
+                .rest_positions
+                .iter()
+                .map(|p| p.map(f64::from))
+                .collect(),
+            faces: data.faces.clone(),
+        },
+        weights: data.weights.clone(),
+        joints: data.joints.iter().map(|j| j.map(f64::from)).collect(),
+        parents: data.parents.clone(),
+        joint_distances: data.joint_distances.clone(),
+    }
+}
+
 impl Posed {
     /// Prepares `data` for a model with `influences` weights per vertex.
     pub fn new(id: &str, data: CharacterData, influences: usize) -> Result<Self> {
-        let rig = CharacterRig {
-            mesh: weft_mesh::TriMesh {
-                positions: data
-                    .rest_positions
-                    .iter()
-                    .map(|p| p.map(f64::from))
-                    .collect(),
-                faces: data.faces.clone(),
-            },
-            weights: data.weights.clone(),
-            joints: data.joints.iter().map(|j| j.map(f64::from)).collect(),
-            parents: data.parents.clone(),
-            joint_distances: data.joint_distances.clone(),
-        };
-        let character = Character::new(rig, influences)?;
+        let character = Character::new(rig_of(&data), influences)?;
         Ok(Posed {
             id: id.to_string(),
             character,
