@@ -12,7 +12,7 @@ use burn::tensor::{Tensor, TensorData};
 use serde::Serialize;
 use weft_body::BodyModel;
 use weft_models::densegats::{DenseGats, DenseGatsConfig};
-use weft_models::refine::{Character, CharacterRig, PositionFeature, RefineNet};
+use weft_models::refine::{Character, CharacterRig, RefineNet};
 use weft_nn::backend::cpu;
 
 use crate::timing::try_median_ms;
@@ -151,12 +151,12 @@ impl DenseGatsBench {
         let reps = self.reps;
         let inputs_ms = try_median_ms(reps, || {
             character
-                .pose_input(&pose, [0.0; 3], PositionFeature::Position)
+                .pose_input(&pose, [0.0; 3], cfg.position, cfg.frame)
                 .map(|_| ())
         })
         .map_err(BenchError::stage("pose inputs"))?;
         let features = character
-            .pose_input(&pose, [0.0; 3], PositionFeature::Position)
+            .pose_input(&pose, [0.0; 3], cfg.position, cfg.frame)
             .map_err(BenchError::stage("pose inputs"))?
             .features;
         let x = Tensor::<2>::from_data(TensorData::new(features, [n, 6 + s]), &device);
@@ -201,7 +201,7 @@ impl DenseGatsBench {
         let network_ms =
             try_median_ms(reps, || net.forward(x.clone(), batch).map(sync)).map_err(nn)?;
         let frame_ms = try_median_ms(reps, || {
-            let input = character.pose_input(&pose, [0.0; 3], PositionFeature::Position)?;
+            let input = character.pose_input(&pose, [0.0; 3], cfg.position, cfg.frame)?;
             let x = Tensor::<2>::from_data(TensorData::new(input.features, [n, 6 + s]), &device);
             net.forward(x, batch).map(sync)
         })

@@ -186,18 +186,7 @@ pub fn skin_with(
             }
         }
         Skinning::Dqs => {
-            // Flat [w, x, y, z | w, x, y, z] per joint: the per-vertex loop below is
-            // the hot path and stays on plain arrays.
-            let dq: Vec<[f64; 8]> = transforms
-                .iter()
-                .map(|a| {
-                    let q = DualQuat::from_rigid(&a.rotation, &a.translation);
-                    [
-                        q.real.w, q.real.i, q.real.j, q.real.k, q.dual.w, q.dual.i, q.dual.j,
-                        q.dual.k,
-                    ]
-                })
-                .collect();
+            let dq = dual_quats(transforms);
             for (v, &p) in rest.iter().enumerate() {
                 out(v, dqs_vertex(&dq, weights, v, p));
             }
@@ -205,13 +194,24 @@ pub fn skin_with(
     }
 }
 
-/// Dual quaternion skinning of one vertex (Kavan et al. 2007, Alg. 1): blend the
-/// joints' dual quaternions, each flipped into the hemisphere of the dominant joint's,
-/// divide by the norm of the real part, and apply
-/// `p' = p + 2 r⃗ × (r⃗ × p + r₀ p) + 2 (r₀ d⃗ − d₀ r⃗ + r⃗ × d⃗)`.
-/// The translation term ignores any part of `d` along `r` (it is scalar in `d r*`), so
-/// no re-orthogonalisation is needed.
-fn dqs_vertex(dq: &[[f64; 8]], weights: &SkinWeights, v: usize, p: [f64; 3]) -> [f64; 3] {
+/// The joints' skinning transforms as flat dual quaternions `[w, x, y, z | w, x, y, z]`:
+/// the per-vertex loops of DQS stay on plain arrays.
+fn dual_quats(transforms: &[Rigid]) -> Vec<[f64; 8]> {
+    transforms
+        .iter()
+        .map(|a| {
+            let q = DualQuat::from_rigid(&a.rotation, &a.translation);
+            [
+                q.real.w, q.real.i, q.real.j, q.real.k, q.dual.w, q.dual.i, q.dual.j, q.dual.k,
+            ]
+        })
+        .collect()
+}
+
+/// Vertex `v`'s blended dual quaternion (Kavan et al. 2007, Alg. 1): the joints' dual
+/// quaternions, each flipped into the hemisphere of the dominant joint's, summed and
+/// divided by the norm of the real part. `None` for a vertex without (positive) weights.
+fn blend_vertex(dq: &[[f64; 8]], weights: &SkinWeights, v: usize) -> Option<[f64; 8]> {
     let mut pivot = 0;
     let mut best = f64::NEG_INFINITY;
     for (j, w) in weights.influences(v) {
@@ -232,12 +232,22 @@ fn dqs_vertex(dq: &[[f64; 8]], weights: &SkinWeights, v: usize, p: [f64; 3]) -> 
     }
     let n = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2] + b[3] * b[3]).sqrt();
     if n.is_nan() || n <= 1e-12 {
-        // Only for a vertex without (positive) weights: leave it where it is.
-        return p;
+        return None;
     }
-    let inv = 1.0 / n;
-    let (r0, r) = (b[0] * inv, [b[1] * inv, b[2] * inv, b[3] * inv]);
-    let (d0, d) = (b[4] * inv, [b[5] * inv, b[6] * inv, b[7] * inv]);
+    Some(b.map(|x| x / n))
+}
+
+/// Dual quaternion skinning of one vertex: its blended dual quaternion applied as
+/// `p' = p + 2 r⃗ × (r⃗ × p + r₀ p) + 2 (r₀ d⃗ − d₀ r⃗ + r⃗ × d⃗)`.
+/// The translation term ignores any part of `d` along `r` (it is scalar in `d r*`), so
+/// no re-orthogonalisation is needed.
+fn dqs_vertex(dq: &[[f64; 8]], weights: &SkinWeights, v: usize, p: [f64; 3]) -> [f64; 3] {
+    // A vertex without weights stays where it is.
+    let Some(b) = blend_vertex(dq, weights, v) else {
+        return p;
+    };
+    let (r0, r) = (b[0], [b[1], b[2], b[3]]);
+    let (d0, d) = (b[4], [b[5], b[6], b[7]]);
     let cross = |a: [f64; 3], c: [f64; 3]| {
         [
             a[1] * c[2] - a[2] * c[1],
@@ -250,6 +260,31 @@ fn dqs_vertex(dq: &[[f64; 8]], weights: &SkinWeights, v: usize, p: [f64; 3]) -> 
     let rot = cross(r, inner);
     let rd = cross(r, d);
     [0, 1, 2].map(|k| p[k] + 2.0 * rot[k] + 2.0 * (r0 * d[k] - d0 * r[k] + rd[k]))
+}
+
+/// Each vertex's DQS transform: the rigid transform dual quaternion skinning applies to
+/// it (`dqs(rest)[v] == frames[v].apply(rest[v])`), identity for a vertex without
+/// weights. A smooth per-vertex frame that follows the bones: learned refinement reads
+/// its features and predicts its corrections in it.
+pub fn dqs_frames(weights: &SkinWeights, transforms: &[Rigid]) -> Vec<Rigid> {
+    assert_eq!(transforms.len(), weights.joint_count());
+    let dq = dual_quats(transforms);
+    (0..weights.vertex_count())
+        .map(|v| {
+            blend_vertex(&dq, weights, v)
+                .and_then(|b| {
+                    let q = DualQuat {
+                        real: nalgebra::Quaternion::new(b[0], b[1], b[2], b[3]),
+                        dual: nalgebra::Quaternion::new(b[4], b[5], b[6], b[7]),
+                    };
+                    q.to_rigid()
+                })
+                .map_or_else(Rigid::identity, |(rotation, translation)| Rigid {
+                    rotation,
+                    translation,
+                })
+        })
+        .collect()
 }
 
 /// Skins `rest` into new `f64` positions; see [`skin_with`].
@@ -393,6 +428,28 @@ mod tests {
         // lands near (−1, 0, 0) at unit distance.
         assert!((Vector3::from(p).norm() - 1.0).abs() < 1e-12);
         assert!(p[0] < -0.99);
+    }
+
+    #[test]
+    fn dqs_frames_are_the_transforms_dqs_applies() {
+        let (s, j, rest, w) = arm();
+        let a = s
+            .skinning_transforms_axis_angle(
+                &j,
+                &[[0.0, 0.3, 0.0], [0.2, 0.0, 1.4]],
+                [0.5, 0.0, -1.0],
+            )
+            .unwrap();
+        let frames = dqs_frames(&w, &a);
+        for ((f, p), q) in frames.iter().zip(&rest).zip(dqs(&rest, &w, &a)) {
+            assert!(near(f.apply(*p), q, 1e-12));
+            // A rotation: orthonormal with determinant +1.
+            assert!((f.rotation.transpose() * f.rotation - Matrix3::identity()).norm() < 1e-12);
+            assert!((f.rotation.determinant() - 1.0).abs() < 1e-12);
+        }
+        // A vertex with one bone takes that bone's transform.
+        assert!((frames[0].rotation - a[0].rotation).norm() < 1e-12);
+        assert!((frames[8].rotation - a[1].rotation).norm() < 1e-12);
     }
 
     proptest! {

@@ -165,7 +165,11 @@ pub fn train_refine<M: ModelSettings + RefineConfig>(
     spec: &TrainSpec,
     log: &mut dyn FnMut(&str),
 ) -> Result<Outcome, PipelineError> {
-    let (position, influences) = (cfg.model.position(), cfg.model.influences());
+    let (position, frame, influences) = (
+        cfg.model.position(),
+        cfg.model.frame(),
+        cfg.model.influences(),
+    );
     let set = CharacterSet::open(&spec.data).map_err(stage(&format!(
         "opening the character dataset {}",
         spec.data.display()
@@ -182,7 +186,7 @@ pub fn train_refine<M: ModelSettings + RefineConfig>(
     let normalizer = if spec.resume && normalizer_path.exists() {
         weft_models::refine::read_normalizer(&normalizer_path)?
     } else {
-        let n = fit_normalizer(&train_chars, position)
+        let n = fit_normalizer(&train_chars, position, frame)
             .map_err(stage("fitting the feature normaliser"))?;
         save_normalizer(&spec.out, &n)?;
         n
@@ -191,7 +195,7 @@ pub fn train_refine<M: ModelSettings + RefineConfig>(
     let characters = train_chars.len();
     let mut task: RefineTask<M::Net> = RefineTask::new(
         &cfg.train.task,
-        position,
+        (position, frame),
         train_chars,
         validation,
         normalizer,

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use weft_garment::GarmentKind;
 use weft_motion::MotionKind;
+use weft_sim::ElasticSkinParams;
 
 use crate::error::DataError;
 
@@ -88,6 +89,9 @@ pub struct CharacterConfig {
     pub frames_per_motion: usize,
     /// Where the ground truth comes from.
     pub truth: TruthSource,
+    /// The elastic-skinning solve of `truth = "elastic"` (`[elastic]`; every field
+    /// defaults to weft_sim's documented value).
+    pub elastic: ElasticSkinParams,
 }
 
 impl Default for CharacterConfig {
@@ -137,6 +141,7 @@ impl CharacterConfig {
                 .to_vec(),
             frames_per_motion: 2,
             truth: TruthSource::Elastic,
+            elastic: ElasticSkinParams::default(),
         }
     }
 
@@ -244,6 +249,9 @@ impl CharacterConfig {
             }
         };
         positive("pose_range", self.pose_range, 1.0)?;
+        self.elastic
+            .check()
+            .map_err(|e| DataError::config("elastic", e.to_string()))?;
         positive("layer_offset", self.layer_offset, 0.05)?;
         positive("beta_limit", self.beta_limit, 5.0)?;
         if !(self.beta_sigma.is_finite() && self.beta_sigma >= 0.0) {
@@ -351,5 +359,23 @@ mod tests {
         let mut c = CharacterConfig::tiny();
         c.pose_range = 1.5;
         assert!(c.validate().unwrap_err().to_string().contains("pose_range"));
+        let mut c = CharacterConfig::tiny();
+        c.elastic.bending_stiffness = -1.0;
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("elastic") && e.contains("bending"), "{e}");
+    }
+
+    #[test]
+    fn elastic_parameters_come_from_the_file_and_default_per_field() {
+        let c: CharacterConfig = toml::from_str("[elastic]\nbending_stiffness = 1.0\n").unwrap();
+        assert_eq!(c.elastic.bending_stiffness, 1.0);
+        assert_eq!(
+            c.elastic.volume_stiffness,
+            ElasticSkinParams::default().volume_stiffness
+        );
+        assert!(toml::from_str::<CharacterConfig>("[elastic]\nstiffness = 1.0\n").is_err());
+        // A dataset config written before `[elastic]` existed reads as the defaults.
+        let old: CharacterConfig = toml::from_str("seed = 0\n").unwrap();
+        assert_eq!(old.elastic, ElasticSkinParams::default());
     }
 }

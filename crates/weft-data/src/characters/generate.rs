@@ -21,7 +21,7 @@ use weft_body::{BodyModel, Pose, Skinning};
 use weft_garment::Style;
 use weft_mesh::io::lock::{remove_stale_temps, Access, DirLock, LOCK_FILE};
 use weft_mesh::rng::SplitMix64;
-use weft_sim::{ElasticSkin, ElasticSkinParams};
+use weft_sim::ElasticSkin;
 
 use super::config::{CharacterConfig, TruthSource};
 use super::dressed::{dress, DressedCharacter};
@@ -266,7 +266,7 @@ fn solve_truth(
                 &character.mesh.positions[..body_n],
                 &character.mesh.faces[..body_faces],
                 &body_weights,
-                &ElasticSkinParams::default(),
+                &config.elastic,
             )
             .map_err(|e| fail(format!("elastic skinning setup: {e}")))?;
             let skeleton = Skeleton::new(character.parents.clone())

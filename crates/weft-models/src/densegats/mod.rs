@@ -22,7 +22,7 @@ use burn::tensor::{Device, Tensor};
 use weft_nn::{Activation, DenseGatModule, DenseGatModuleConfig, GraphBatch, Mlp, NormedGat};
 
 use crate::error::ModelError;
-use crate::refine::{nn_error as nn, tanh_mlp, PositionFeature, RefineNet};
+use crate::refine::{nn_error as nn, tanh_mlp, Frame, PositionFeature, RefineNet};
 
 /// Configuration of [`DenseGats`].
 #[derive(Config, Debug, PartialEq)]
@@ -33,6 +33,10 @@ pub struct DenseGatsConfig {
     /// What stands in for positions in the node features.
     #[config(default = "PositionFeature::Position")]
     pub position: PositionFeature,
+    /// The frame of the features and corrections (world axes: the thesis; a run whose
+    /// config names none is a world-axes run).
+    #[config(default = "Frame::World")]
+    pub frame: Frame,
     /// Influences per vertex of the coarse LBS (§3.2.3.1: at most eight).
     #[config(default = 8)]
     pub influences: usize,
@@ -212,6 +216,10 @@ impl crate::refine::RefineConfig for DenseGatsConfig {
 
     fn position(&self) -> PositionFeature {
         self.position
+    }
+
+    fn frame(&self) -> Frame {
+        self.frame
     }
 
     fn influences(&self) -> usize {

@@ -29,7 +29,7 @@ use weft_nn::{
 };
 
 use crate::error::ModelError;
-use crate::refine::{nn_error as nn, tanh_mlp, PositionFeature, RefineNet};
+use crate::refine::{nn_error as nn, tanh_mlp, Frame, PositionFeature, RefineNet};
 
 /// Configuration of [`MultiResGnet`].
 #[derive(Config, Debug, PartialEq)]
@@ -40,6 +40,10 @@ pub struct MultiResGnetConfig {
     /// What stands in for positions in the node features (§3.3.1: the descriptor).
     #[config(default = "PositionFeature::Descriptor")]
     pub position: PositionFeature,
+    /// The frame of the features and corrections (world axes: the thesis; a run whose
+    /// config names none is a world-axes run).
+    #[config(default = "Frame::World")]
+    pub frame: Frame,
     /// Influences per vertex of the coarse LBS (§3.3.3.1: at most four).
     #[config(default = 4)]
     pub influences: usize,
@@ -274,6 +278,10 @@ impl crate::refine::RefineConfig for MultiResGnetConfig {
 
     fn position(&self) -> PositionFeature {
         self.position
+    }
+
+    fn frame(&self) -> Frame {
+        self.frame
     }
 
     fn influences(&self) -> usize {

@@ -7,16 +7,21 @@
 //! positions and normals of the coarse mesh (thesis-reference D8: the graph is built on
 //! `M_coarse`), or in place of positions the relative skinning descriptor of eq. 3.9,
 //! which is LBS without translations and so does not change when the character moves.
+//!
+//! Features and corrections are written in world axes (the thesis) or, with
+//! [`Frame::Skinning`], in each vertex's DQS frame: see [`Frame`].
 
+use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 use weft_body::features::body::descriptor_from_transforms;
 use weft_body::features::weights::SkinningWeights;
 use weft_body::kinematics::{Rigid, Skeleton};
-use weft_body::skinning::{dqs, lbs, SkinWeights};
+use weft_body::skinning::{dqs, dqs_frames, lbs, SkinWeights};
 use weft_body::{Pose, Skinning};
 use weft_mesh::TriMesh;
 use weft_nn::GraphBatch;
 
+use super::CM_PER_M;
 use crate::error::ModelError;
 
 /// What stands in for a vertex's position in the node features.
@@ -46,6 +51,29 @@ pub struct CharacterRig {
     pub joint_distances: Vec<f32>,
 }
 
+/// The frame in which a vertex's features are read and its correction predicted.
+///
+/// In world axes (the thesis) the correction of a bent elbow points another way for
+/// every orientation of the upper arm, so the network must learn each joint's
+/// correction once per orientation of its parent chain, which a few hundred poses
+/// cannot teach. In the vertex's own DQS frame (the rigid transform dual quaternion
+/// skinning gives it: smooth over the mesh, the bone's own transform where one bone
+/// dominates) the correction depends only on how the neighbouring bones turn relative
+/// to each other, as per-bone local offsets do in Bailey et al. 2018 (fast deep
+/// deformation approximations). Position features then also ignore where the character
+/// stands and how it is turned (Fig. 3.23's test).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Frame {
+    /// World axes: features and corrections as the thesis writes them (the default of a
+    /// run whose config names no frame).
+    #[default]
+    World,
+    /// Each vertex's DQS frame: positions `R_iᵀ (p_i − t_i)`, descriptors and normals
+    /// `R_iᵀ v`, corrections predicted as `δ_i` and applied as `R_i δ_i`.
+    Skinning,
+}
+
 /// A [`CharacterRig`] prepared for one model (see the module documentation).
 #[derive(Clone, Debug)]
 pub struct Character {
@@ -63,6 +91,43 @@ pub struct PoseInput {
     pub coarse: Vec<[f64; 3]>,
     /// Node features, row-major `N × (6 + S)`.
     pub features: Vec<f32>,
+    /// Each vertex's frame rotation `R_i` ([`Frame::Skinning`]); empty in world axes.
+    pub rotations: Vec<Matrix3<f64>>,
+}
+
+impl PoseInput {
+    /// The correction from the coarse mesh to `truth` in centimetres, row-major
+    /// `N × 3`, in the frame the features are in (the network's target).
+    pub fn target_cm(&self, truth: &[[f32; 3]]) -> Vec<f32> {
+        let mut out = Vec::with_capacity(3 * self.coarse.len());
+        for (i, (t, c)) in truth.iter().zip(&self.coarse).enumerate() {
+            let d = Vector3::from(std::array::from_fn(|k| f64::from(t[k]) - c[k])) * CM_PER_M;
+            let d = match self.rotations.get(i) {
+                Some(r) => r.transpose() * d,
+                None => d,
+            };
+            out.extend(d.iter().map(|&x| x as f32));
+        }
+        out
+    }
+
+    /// The coarse mesh plus the network's corrections `delta_cm` (centimetres, row-major
+    /// `N × 3`, in the features' frame).
+    pub fn corrected(&self, delta_cm: &[f32]) -> Vec<[f64; 3]> {
+        self.coarse
+            .iter()
+            .zip(delta_cm.chunks_exact(3))
+            .enumerate()
+            .map(|(i, (c, d))| {
+                let d = Vector3::new(f64::from(d[0]), f64::from(d[1]), f64::from(d[2])) / CM_PER_M;
+                let d = match self.rotations.get(i) {
+                    Some(r) => r * d,
+                    None => d,
+                };
+                std::array::from_fn(|k| c[k] + d[k])
+            })
+            .collect()
+    }
 }
 
 impl Character {
@@ -192,12 +257,13 @@ impl Character {
         }
     }
 
-    /// The LBS coarse mesh and node features of `pose` at `translation`.
+    /// The LBS coarse mesh and node features of `pose` at `translation`, in `frame`.
     pub fn pose_input(
         &self,
         pose: &Pose,
         translation: [f64; 3],
         position: PositionFeature,
+        frame: Frame,
     ) -> Result<PoseInput, ModelError> {
         let transforms = self.transforms(pose, translation)?;
         let coarse = self.coarse(&transforms, Skinning::Lbs);
@@ -216,17 +282,35 @@ impl Character {
             faces: self.rig.mesh.faces.clone(),
         }
         .vertex_normals();
+        let frames = match frame {
+            Frame::World => Vec::new(),
+            Frame::Skinning => dqs_frames(&self.skin, &transforms),
+        };
         let s = self.joint_count();
         let w = 6 + s;
         let mut features = vec![0.0f32; self.vertex_count() * w];
         for (i, row) in features.chunks_exact_mut(w).enumerate() {
+            let (mut p, mut n) = (Vector3::from(first[i]), Vector3::from(normals[i]));
+            if let Some(f) = frames.get(i) {
+                let rt = f.rotation.transpose();
+                // Positions also lose the frame's translation; the descriptor has none.
+                if position == PositionFeature::Position {
+                    p -= f.translation;
+                }
+                p = rt * p;
+                n = rt * n;
+            }
             for k in 0..3 {
-                row[k] = first[i][k] as f32;
-                row[3 + k] = normals[i][k] as f32;
+                row[k] = p[k] as f32;
+                row[3 + k] = n[k] as f32;
             }
             row[6..].copy_from_slice(&self.rig.joint_distances[i * s..(i + 1) * s]);
         }
-        Ok(PoseInput { coarse, features })
+        Ok(PoseInput {
+            coarse,
+            features,
+            rotations: frames.into_iter().map(|f| f.rotation).collect(),
+        })
     }
 }
 
@@ -263,8 +347,40 @@ mod tests {
         };
         // The test rig has 2 joints: a 24-joint pose is refused by name.
         assert!(c
-            .pose_input(&pose, [0.0; 3], PositionFeature::Position)
+            .pose_input(&pose, [0.0; 3], PositionFeature::Position, Frame::World)
             .is_err());
+        let c = Character::new(strip24(), 4).unwrap();
+        let a = c
+            .pose_input(&pose, [0.0; 3], PositionFeature::Descriptor, Frame::World)
+            .unwrap();
+        let b = c
+            .pose_input(
+                &pose,
+                [3.0, 1.0, 0.0],
+                PositionFeature::Descriptor,
+                Frame::World,
+            )
+            .unwrap();
+        assert_eq!(a.features, b.features);
+        assert_ne!(a.coarse, b.coarse);
+        let p = c
+            .pose_input(&pose, [0.0; 3], PositionFeature::Position, Frame::World)
+            .unwrap();
+        let q = c
+            .pose_input(
+                &pose,
+                [3.0, 1.0, 0.0],
+                PositionFeature::Position,
+                Frame::World,
+            )
+            .unwrap();
+        assert_ne!(p.features, q.features);
+        assert_eq!(p.features.len(), 4 * 30);
+    }
+
+    /// The strip's rig on a 24-joint skeleton (joint 1 at x = 1), weights ramping from
+    /// joint 0 to joint 1.
+    fn strip24() -> CharacterRig {
         let mut rig = strip();
         rig.joints = vec![[0.0; 3]; 24];
         rig.joints[1] = [1.0, 0.0, 0.0];
@@ -281,23 +397,75 @@ mod tests {
             })
             .collect();
         rig.joint_distances = vec![0.2; 4 * 24];
-        let c = Character::new(rig, 4).unwrap();
-        let a = c
-            .pose_input(&pose, [0.0; 3], PositionFeature::Descriptor)
-            .unwrap();
-        let b = c
-            .pose_input(&pose, [3.0, 1.0, 0.0], PositionFeature::Descriptor)
-            .unwrap();
-        assert_eq!(a.features, b.features);
-        assert_ne!(a.coarse, b.coarse);
-        let p = c
-            .pose_input(&pose, [0.0; 3], PositionFeature::Position)
-            .unwrap();
-        let q = c
-            .pose_input(&pose, [3.0, 1.0, 0.0], PositionFeature::Position)
-            .unwrap();
-        assert_ne!(p.features, q.features);
-        assert_eq!(p.features.len(), 4 * 30);
+        rig
+    }
+
+    #[test]
+    fn skinning_frame_features_ignore_how_the_character_is_placed_and_round_trip() {
+        let c = Character::new(strip24(), 4).unwrap();
+        let mut pose = [[0.0f32; 3]; 24];
+        pose[1] = [0.3, 0.0, 0.8];
+        let mut turned = pose;
+        turned[0] = [0.4, -1.1, 0.7];
+        for position in [PositionFeature::Position, PositionFeature::Descriptor] {
+            let a = c
+                .pose_input(&pose, [0.0; 3], position, Frame::Skinning)
+                .unwrap();
+            let b = c
+                .pose_input(&turned, [3.0, 1.0, -2.0], position, Frame::Skinning)
+                .unwrap();
+            for (x, y) in a.features.iter().zip(&b.features) {
+                assert!((x - y).abs() < 1e-5, "{position:?}: {x} vs {y}");
+            }
+            // The world-axes features do change when the root turns.
+            let w = c
+                .pose_input(&pose, [0.0; 3], position, Frame::World)
+                .unwrap();
+            let v = c
+                .pose_input(&turned, [0.0; 3], position, Frame::World)
+                .unwrap();
+            assert!(w
+                .features
+                .iter()
+                .zip(&v.features)
+                .any(|(x, y)| (x - y).abs() > 1e-2));
+            // A vertex with one bone reads its rest position in its frame.
+            assert!(
+                (0..3).all(|k| (a.features[k] - c.rig().mesh.positions[0][k] as f32).abs() < 1e-6)
+                    || position == PositionFeature::Descriptor
+            );
+        }
+        // Targets and corrections: the same world offset whichever the frame, its length
+        // kept, its direction turned into the vertex's frame.
+        let targets: Vec<Vec<f32>> = [Frame::World, Frame::Skinning]
+            .into_iter()
+            .map(|frame| {
+                let input = c
+                    .pose_input(&turned, [3.0, 1.0, -2.0], PositionFeature::Position, frame)
+                    .unwrap();
+                let truth: Vec<[f32; 3]> = input
+                    .coarse
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| {
+                        std::array::from_fn(|k| (p[k] + 0.01 * (1 + i + k) as f64) as f32)
+                    })
+                    .collect();
+                let target = input.target_cm(&truth);
+                for (back, t) in input.corrected(&target).iter().zip(&truth) {
+                    assert!(
+                        (0..3).all(|k| (back[k] - f64::from(t[k])).abs() < 1e-5),
+                        "{frame:?}"
+                    );
+                }
+                target
+            })
+            .collect();
+        for (w, s) in targets[0].chunks(3).zip(targets[1].chunks(3)) {
+            let len = |v: &[f32]| v.iter().map(|x| x * x).sum::<f32>().sqrt();
+            assert!((len(w) - len(s)).abs() < 1e-4);
+            assert!(w.iter().zip(s).any(|(x, y)| (x - y).abs() > 1e-2));
+        }
     }
 
     #[test]

@@ -19,7 +19,7 @@ use weft_nn::{Activation, FeatureNormalizer, GraphBatch, Mlp, MlpConfig};
 
 use crate::error::ModelError;
 
-pub use character::{Character, CharacterRig, PoseInput, PositionFeature};
+pub use character::{Character, CharacterRig, Frame, PoseInput, PositionFeature};
 pub use predictor::RefinePredictor;
 
 /// The feature normaliser's file in a run directory (fitted on the training characters
@@ -55,6 +55,8 @@ pub trait RefineConfig: serde::de::DeserializeOwned {
     fn build(&self, device: &Device) -> Result<Self::Net, ModelError>;
     /// What stands in for positions in the node features.
     fn position(&self) -> PositionFeature;
+    /// The frame of the features and corrections.
+    fn frame(&self) -> Frame;
     /// Influences per vertex of the coarse LBS.
     fn influences(&self) -> usize;
     /// Joints of the skeleton (node features are `6 + S` wide).

@@ -19,8 +19,8 @@ use weft_garment::FitBody;
 use weft_mesh::TriMesh;
 use weft_nn::FeatureNormalizer;
 
-use super::character::{Character, CharacterRig, PositionFeature};
-use super::{read_normalizer, RefineConfig, RefineNet, CM_PER_M, NORMALIZER_FILE};
+use super::character::{Character, CharacterRig, Frame, PositionFeature};
+use super::{read_normalizer, RefineConfig, RefineNet, NORMALIZER_FILE};
 use crate::deformer::{Clip, Deformer, Frames};
 use crate::densegats::DenseGatsConfig;
 use crate::error::ModelError;
@@ -34,6 +34,7 @@ pub struct RefinePredictor {
     net: Box<dyn RefineNet + Send + Sync>,
     normalizer: FeatureNormalizer,
     position: PositionFeature,
+    frame: Frame,
     influences: usize,
     device: Device,
     checkpoint: PathBuf,
@@ -62,6 +63,14 @@ fn load_record<M: Module>(fresh: M, checkpoint: &Path) -> Result<M, ModelError> 
         })
 }
 
+/// What a loaded refinement network reads.
+struct Reads {
+    position: PositionFeature,
+    frame: Frame,
+    influences: usize,
+    joints: usize,
+}
+
 /// The network of `[model]` (`path` names config.toml in errors) with the parameters
 /// of `checkpoint`, and what it reads.
 fn load_net<C: RefineConfig>(
@@ -69,15 +78,7 @@ fn load_net<C: RefineConfig>(
     path: &Path,
     checkpoint: &Path,
     device: &Device,
-) -> Result<
-    (
-        Box<dyn RefineNet + Send + Sync>,
-        PositionFeature,
-        usize,
-        usize,
-    ),
-    ModelError,
-> {
+) -> Result<(Box<dyn RefineNet + Send + Sync>, Reads), ModelError> {
     let cfg: C = model
         .try_into()
         .map_err(|e: toml::de::Error| run_err(path, format!("[model]: {e}")))?;
@@ -86,9 +87,12 @@ fn load_net<C: RefineConfig>(
     let net = load_record(cfg.build(device)?, checkpoint)?;
     Ok((
         Box::new(net),
-        cfg.position(),
-        cfg.influences(),
-        cfg.joints(),
+        Reads {
+            position: cfg.position(),
+            frame: cfg.frame(),
+            influences: cfg.influences(),
+            joints: cfg.joints(),
+        },
     ))
 }
 
@@ -105,7 +109,7 @@ impl RefinePredictor {
         };
         let device = weft_nn::backend::cpu();
         let checkpoint = latest_checkpoint(dir)?;
-        let (net, position, influences, joints) = match header.model {
+        let (net, reads) = match header.model {
             ModelKind::DenseGats => {
                 load_net::<DenseGatsConfig>(model, &path, &checkpoint, &device)?
             }
@@ -122,6 +126,7 @@ impl RefinePredictor {
             }
         };
         let normalizer = read_normalizer(&dir.join(NORMALIZER_FILE))?;
+        let joints = reads.joints;
         if normalizer.width() != 6 + joints {
             return Err(run_err(
                 &dir.join(NORMALIZER_FILE),
@@ -136,8 +141,9 @@ impl RefinePredictor {
             kind: header.model,
             net,
             normalizer,
-            position,
-            influences,
+            position: reads.position,
+            frame: reads.frame,
+            influences: reads.influences,
             device,
             checkpoint,
         })
@@ -161,8 +167,8 @@ impl RefinePredictor {
         pose: &Pose,
         translation: [f64; 3],
     ) -> Result<Vec<[f64; 3]>, ModelError> {
-        let input = character.pose_input(pose, translation, self.position)?;
-        let mut features = input.features;
+        let mut input = character.pose_input(pose, translation, self.position, self.frame)?;
+        let mut features = std::mem::take(&mut input.features);
         self.normalizer
             .apply(&mut features)
             .map_err(|e| ModelError::Config(format!("feature normaliser: {e}")))?;
@@ -178,12 +184,7 @@ impl RefinePredictor {
             .convert::<f32>()
             .try_into_vec::<f32>()
             .map_err(|e| ModelError::Config(format!("network output: {e:?}")))?;
-        Ok(input
-            .coarse
-            .iter()
-            .zip(delta.chunks_exact(3))
-            .map(|(c, d)| std::array::from_fn(|k| c[k] + f64::from(d[k]) / CM_PER_M))
-            .collect())
+        Ok(input.corrected(&delta))
     }
 
     /// Binds `mesh` (in the rest pose of `body` at `betas`) to the body: weights from the
@@ -238,6 +239,7 @@ impl Deformer for RefinePredictor {
                 "position feature".into(),
                 format!("{:?}", self.position).to_lowercase(),
             ),
+            ("frame".into(), format!("{:?}", self.frame).to_lowercase()),
         ])
     }
 

@@ -108,7 +108,8 @@ impl Default for ElasticSkinParams {
 }
 
 impl ElasticSkinParams {
-    fn check(&self) -> Result<(), SimError> {
+    /// Checks the values (the error names the parameter).
+    pub fn check(&self) -> Result<(), SimError> {
         check_nonneg(
             || "membrane stiffness".into(),
             self.membrane_stiffness,

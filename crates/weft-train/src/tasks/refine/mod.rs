@@ -25,7 +25,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use weft_data::characters::{CharacterData, CharacterSet};
 use weft_data::Split;
 use weft_mesh::rng::SplitMix64;
-use weft_models::refine::{Character, CharacterRig, PositionFeature, RefineNet, CM_PER_M};
+use weft_models::refine::{Character, CharacterRig, Frame, PositionFeature, RefineNet};
 use weft_nn::{FeatureNormalizer, GraphBatch, NormalizerFit, Patch};
 
 pub use config::RefineTraining;
@@ -95,23 +95,20 @@ impl Posed {
     }
 
     /// Normalised features `[N, 6 + S]`, the coarse mesh and the target corrections (cm,
-    /// `[N, 3]`) of pose `p`.
+    /// `[N, 3]`, in `frame`) of pose `p`.
     pub fn inputs(
         &self,
         p: usize,
         position: PositionFeature,
+        frame: Frame,
         normalizer: &FeatureNormalizer,
     ) -> Result<PoseTensors> {
-        let input = self
-            .character
-            .pose_input(&self.data.poses[p], [0.0; 3], position)?;
-        let mut features = input.features;
+        let mut input =
+            self.character
+                .pose_input(&self.data.poses[p], [0.0; 3], position, frame)?;
+        let targets = input.target_cm(&self.data.truth[p]);
+        let mut features = std::mem::take(&mut input.features);
         normalizer.apply(&mut features).map_err(nn)?;
-        let targets = self.data.truth[p]
-            .iter()
-            .zip(&input.coarse)
-            .flat_map(|(t, c)| (0..3).map(move |k| ((f64::from(t[k]) - c[k]) * CM_PER_M) as f32))
-            .collect();
         Ok((features, input.coarse, targets))
     }
 }
@@ -135,6 +132,7 @@ pub fn load_split(set: &CharacterSet, split: Split, influences: usize) -> Result
 pub fn fit_normalizer(
     characters: &[Posed],
     position: PositionFeature,
+    frame: Frame,
 ) -> Result<FeatureNormalizer> {
     let width = characters
         .first()
@@ -143,7 +141,7 @@ pub fn fit_normalizer(
     let mut fit = NormalizerFit::new(width).map_err(nn)?;
     for c in characters {
         for pose in &c.data.poses {
-            let input = c.character.pose_input(pose, [0.0; 3], position)?;
+            let input = c.character.pose_input(pose, [0.0; 3], position, frame)?;
             fit.observe(&input.features).map_err(nn)?;
         }
     }
@@ -154,6 +152,7 @@ pub fn fit_normalizer(
 pub struct RefineTask<M> {
     training: RefineTraining,
     position: PositionFeature,
+    frame: Frame,
     normalizer: FeatureNormalizer,
     device: Device,
     seed: u64,
@@ -167,10 +166,10 @@ pub struct RefineTask<M> {
 
 impl<M> RefineTask<M> {
     /// The task over `train` and `validation` characters, with the normaliser fitted on
-    /// `train`.
+    /// `train`; the model reads `position` in `frame`.
     pub fn new(
         training: &RefineTraining,
-        position: PositionFeature,
+        (position, frame): (PositionFeature, Frame),
         train: Vec<Posed>,
         validation: Vec<Posed>,
         normalizer: FeatureNormalizer,
@@ -194,6 +193,7 @@ impl<M> RefineTask<M> {
         Ok(RefineTask {
             training: training.clone(),
             position,
+            frame,
             normalizer,
             device: device.clone(),
             seed,
@@ -260,7 +260,8 @@ where
             );
             let patch = Patch::grow(posed.character.graph(), rng.below(n), self.training.patch)
                 .map_err(nn)?;
-            let (features, _, targets) = posed.inputs(p, self.position, &self.normalizer)?;
+            let (features, _, targets) =
+                posed.inputs(p, self.position, self.frame, &self.normalizer)?;
             let width = posed.character.feature_width();
             xs.push(self.tensor(patch.gather(&features, width).map_err(nn)?, width));
             ys.push(self.tensor(patch.gather(&targets, 3).map_err(nn)?, 3));
@@ -277,7 +278,8 @@ where
         for posed in &self.validation {
             let width = posed.character.feature_width();
             for p in 0..posed.data.poses.len() {
-                let (features, _, targets) = posed.inputs(p, self.position, &self.normalizer)?;
+                let (features, _, targets) =
+                    posed.inputs(p, self.position, self.frame, &self.normalizer)?;
                 let pred = model.forward(self.tensor(features, width), posed.character.batch())?;
                 let pred: Vec<f32> = pred
                     .into_data()
