@@ -27,6 +27,45 @@ use crate::error::PipelineError;
 /// Upper edges of the histogram bins, cm (the last bin holds everything above 2 cm).
 pub const HISTOGRAM_EDGES_CM: [f64; 8] = [0.05, 0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 2.0];
 
+/// The joints whose blend regions the tables report apart (SMPL's numbering, left and
+/// right): where LBS collapses and bulges, which the thesis's corrections are about, so
+/// their error is not drowned by the rest of the mesh.
+pub const JOINT_REGIONS: [(&str, [usize; 2]); 4] = [
+    ("elbows", [18, 19]),
+    ("knees", [4, 5]),
+    ("shoulders", [16, 17]),
+    ("hips", [1, 2]),
+];
+
+/// A vertex belongs to a joint's region when both the joint and its parent weigh at
+/// least this on it: the blend ring around the joint.
+pub const REGION_MIN_WEIGHT: f32 = 0.1;
+
+/// The vertices of each of [`JOINT_REGIONS`] on a rig with `parents` and dense
+/// `weights` (row-major `N × S`); empty regions for a skeleton other than SMPL's 24
+/// joints.
+pub fn joint_regions(weights: &[f32], parents: &[Option<usize>]) -> Vec<Vec<usize>> {
+    let s = parents.len();
+    JOINT_REGIONS
+        .iter()
+        .map(|(_, joints)| {
+            if s != 24 {
+                return Vec::new();
+            }
+            (0..weights.len() / s)
+                .filter(|&v| {
+                    let row = &weights[v * s..(v + 1) * s];
+                    joints.iter().any(|&j| {
+                        parents[j].is_some_and(|p| {
+                            row[j] >= REGION_MIN_WEIGHT && row[p] >= REGION_MIN_WEIGHT
+                        })
+                    })
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// Errors of one method on one character, cm.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CharacterErrors {
@@ -61,6 +100,9 @@ pub struct MethodErrors {
     pub histogram: Vec<u64>,
     /// Milliseconds per frame (whole mesh), for learned methods.
     pub ms_per_frame: Option<f64>,
+    /// Mean per-vertex distance over the vertices of each of [`JOINT_REGIONS`], in its
+    /// order (NaN where no character has the region).
+    pub regions_cm: Vec<f64>,
 }
 
 /// Every method on one split.
@@ -94,13 +136,20 @@ impl Accumulator {
         }
     }
 
-    fn add(&mut self, predicted: &[[f64; 3]], truth: &[[f32; 3]], shift: [f64; 3]) {
-        for (p, t) in predicted.iter().zip(truth) {
-            let d = (0..3)
-                .map(|k| (p[k] - (f64::from(t[k]) + shift[k])).powi(2))
-                .sum::<f64>()
-                .sqrt()
-                * 100.0;
+    /// Adds the distances of `predicted` to `truth` moved by `shift` and returns them (cm).
+    fn add(&mut self, predicted: &[[f64; 3]], truth: &[[f32; 3]], shift: [f64; 3]) -> Vec<f64> {
+        let distances: Vec<f64> = predicted
+            .iter()
+            .zip(truth)
+            .map(|(p, t)| {
+                (0..3)
+                    .map(|k| (p[k] - (f64::from(t[k]) + shift[k])).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+                    * 100.0
+            })
+            .collect();
+        for &d in &distances {
             self.sum += d;
             self.count += 1;
             self.max = self.max.max(d);
@@ -111,6 +160,7 @@ impl Accumulator {
                 .unwrap_or(HISTOGRAM_EDGES_CM.len());
             self.histogram[bin] += 1;
         }
+        distances
     }
 
     fn merge(&mut self, other: &Accumulator) {
@@ -150,17 +200,23 @@ impl Method {
     }
 }
 
+/// Radius around a joint's rest position of the close-up pictures (m): the blend ring
+/// and a few centimetres of each limb.
+pub const CLOSE_UP_RADIUS: f64 = 0.12;
+
 /// Evaluates `runs` (each named by its directory name) and the LBS/DQS baselines on the
 /// `split` characters of the dataset in `data`, every pose moved by `translation`; with
-/// the table, a picture of the split's first character in the two poses where LBS is
-/// worst: the truth, then every method coloured by its distance to the truth on one
-/// scale.
+/// the table, pictures named by file stem: `characters`, the split's first character in
+/// the two poses where LBS is worst, and a close-up per joint pair of
+/// [`JOINT_REGIONS`] (`elbows`, `knees`, …): the left joint's surroundings in the two
+/// poses where LBS is worst there. Each shows the truth, then every method coloured by
+/// its distance to the truth on one scale.
 pub fn evaluate_characters(
     runs: &[PathBuf],
     data: &Path,
     split: Split,
     translation: [f64; 3],
-) -> Result<(CharacterTable, Image), PipelineError> {
+) -> Result<(CharacterTable, Vec<(String, Image)>), PipelineError> {
     let set = CharacterSet::open(data)?;
     let records = set.records(split);
     if records.is_empty() {
@@ -196,15 +252,20 @@ pub fn evaluate_characters(
         .iter()
         .map(|_| (Vec::new(), Accumulator::new(), 0.0, 0))
         .collect();
+    // Per method and region: summed distance and vertex count.
+    let mut region_sums = vec![vec![(0.0f64, 0usize); JOINT_REGIONS.len()]; methods.len()];
     // The first character's frames of every method, for the picture.
     let mut shown: Vec<Vec<Vec<[f32; 3]>>> = methods.iter().map(|_| Vec::new()).collect();
     let mut shown_truth: Vec<Vec<[f32; 3]>> = Vec::new();
     let mut shown_faces = Vec::new();
+    let mut shown_rig = None;
     for (index, r) in records.iter().enumerate() {
         let data = set.load(r)?;
         let rig = rig_of(&data);
+        let regions = joint_regions(&rig.weights, &rig.parents);
         if index == 0 {
             shown_faces = data.faces.clone();
+            shown_rig = Some(rig.clone());
             shown_truth = data
                 .truth
                 .iter()
@@ -215,8 +276,11 @@ pub fn evaluate_characters(
                 })
                 .collect();
         }
-        for ((m, (rows, total, seconds, frames)), kept) in
-            methods.iter().zip(&mut out).zip(&mut shown)
+        for (((m, (rows, total, seconds, frames)), kept), sums) in methods
+            .iter()
+            .zip(&mut out)
+            .zip(&mut shown)
+            .zip(&mut region_sums)
         {
             let character = Character::new(rig.clone(), m.influences())?;
             let mut acc = Accumulator::new();
@@ -234,7 +298,11 @@ pub fn evaluate_characters(
                         x
                     }
                 };
-                acc.add(&predicted, truth, translation);
+                let distances = acc.add(&predicted, truth, translation);
+                for (region, (sum, count)) in regions.iter().zip(sums.iter_mut()) {
+                    *sum += region.iter().map(|&v| distances[v]).sum::<f64>();
+                    *count += region.len();
+                }
                 if index == 0 {
                     kept.push(predicted.iter().map(|p| p.map(|x| x as f32)).collect());
                 }
@@ -251,20 +319,7 @@ pub fn evaluate_characters(
         }
     }
     // The two poses where LBS (the first method) is worst on average.
-    let lbs = &shown[0];
-    let mut order: Vec<(f64, usize)> = lbs
-        .iter()
-        .zip(&shown_truth)
-        .enumerate()
-        .map(|(t, (p, g))| {
-            let e = vertex_errors_mm(p, g)
-                .map(|e| e.iter().sum::<f64>())
-                .unwrap_or(0.0);
-            (e, t)
-        })
-        .collect();
-    order.sort_by(|a, b| b.0.total_cmp(&a.0));
-    let frames: Vec<usize> = order.iter().take(2).map(|&(_, t)| t).collect();
+    let frames = worst_frames(&shown[0], &shown_truth);
     let names: Vec<String> = methods.iter().map(Method::name).collect();
     let columns: Vec<MethodFrames<'_>> = names
         .iter()
@@ -290,18 +345,131 @@ pub fn evaluate_characters(
         methods: methods
             .iter()
             .zip(out)
-            .map(|(m, (characters, acc, seconds, frames))| MethodErrors {
-                name: m.name(),
-                characters,
-                mean_cm: acc.mean(),
-                max_cm: acc.max,
-                min_cm: acc.min,
-                histogram: acc.histogram,
-                ms_per_frame: (frames > 0).then(|| 1000.0 * seconds / frames as f64),
-            })
+            .zip(&region_sums)
+            .map(
+                |((m, (characters, acc, seconds, frames)), sums)| MethodErrors {
+                    name: m.name(),
+                    characters,
+                    mean_cm: acc.mean(),
+                    max_cm: acc.max,
+                    min_cm: acc.min,
+                    histogram: acc.histogram,
+                    ms_per_frame: (frames > 0).then(|| 1000.0 * seconds / frames as f64),
+                    regions_cm: sums
+                        .iter()
+                        .map(|&(sum, count)| {
+                            if count == 0 {
+                                f64::NAN
+                            } else {
+                                sum / count as f64
+                            }
+                        })
+                        .collect(),
+                },
+            )
             .collect(),
     };
-    Ok((table, picture))
+    let mut pictures = vec![("characters".to_string(), picture)];
+    if let Some(rig) = shown_rig.filter(|r| r.joints.len() == 24) {
+        for (name, [left, _]) in JOINT_REGIONS {
+            let centre = rig.joints[left];
+            let keep: Vec<usize> = rig
+                .mesh
+                .positions
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| {
+                    (0..3)
+                        .map(|k| (p[k] - centre[k]).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                        <= CLOSE_UP_RADIUS
+                })
+                .map(|(v, _)| v)
+                .collect();
+            let faces = crop_faces(&shown_faces, &keep, rig.mesh.positions.len());
+            if faces.is_empty() {
+                continue;
+            }
+            // Each frame moved so the truth's crop is centred: the tiles share one camera,
+            // and the joint is elsewhere in every pose.
+            let centres: Vec<[f32; 3]> = shown_truth
+                .iter()
+                .map(|f| {
+                    let n = keep.len() as f32;
+                    std::array::from_fn(|k| keep.iter().map(|&v| f[v][k]).sum::<f32>() / n)
+                })
+                .collect();
+            let crop = |frames: &[Vec<[f32; 3]>]| -> Vec<Vec<[f32; 3]>> {
+                frames
+                    .iter()
+                    .zip(&centres)
+                    .map(|(f, c)| {
+                        keep.iter()
+                            .map(|&v| std::array::from_fn(|k| f[v][k] - c[k]))
+                            .collect()
+                    })
+                    .collect()
+            };
+            let truth = crop(&shown_truth);
+            let cropped: Vec<Vec<Vec<[f32; 3]>>> = shown.iter().map(|m| crop(m)).collect();
+            let frames = worst_frames(&cropped[0], &truth);
+            let columns: Vec<MethodFrames<'_>> = names
+                .iter()
+                .zip(&cropped)
+                .map(|(name, frames)| MethodFrames { name, frames })
+                .collect();
+            let image = comparison_sheet(
+                &faces,
+                &truth,
+                &columns,
+                None,
+                &frames,
+                360,
+                &format!(
+                    "{}: left {} (within {} cm), truth, then each method coloured by its distance to the truth",
+                    records[0].id,
+                    name.trim_end_matches('s'),
+                    CLOSE_UP_RADIUS * 100.0
+                ),
+            )?;
+            pictures.push((name.to_string(), image));
+        }
+    }
+    Ok((table, pictures))
+}
+
+/// The faces of `faces` whose three vertices are all in `keep` (sorted), re-indexed into
+/// `keep`.
+fn crop_faces(faces: &[[u32; 3]], keep: &[usize], vertices: usize) -> Vec<[u32; 3]> {
+    let mut index = vec![u32::MAX; vertices];
+    for (i, &v) in keep.iter().enumerate() {
+        index[v] = i as u32;
+    }
+    faces
+        .iter()
+        .filter_map(|f| {
+            let g = f.map(|v| index[v as usize]);
+            g.iter().all(|&v| v != u32::MAX).then_some(g)
+        })
+        .collect()
+}
+
+/// The two frames where `method` is farthest from `truth` on average.
+fn worst_frames(method: &[Vec<[f32; 3]>], truth: &[Vec<[f32; 3]>]) -> Vec<usize> {
+    let mut order: Vec<(f64, usize)> = method
+        .iter()
+        .zip(truth)
+        .enumerate()
+        .map(|(t, (p, g))| {
+            let e = vertex_errors_mm(p, g)
+                .map(|e| e.iter().sum::<f64>())
+                .unwrap_or(0.0);
+            (e, t)
+        })
+        .collect();
+    order.sort_by(|a, b| b.0.total_cmp(&a.0));
+    order.iter().take(2).map(|&(_, t)| t).collect()
 }
 
 impl CharacterTable {
@@ -330,6 +498,22 @@ impl CharacterTable {
                     format!("{:.4}", m.min_cm),
                     m.ms_per_frame.map_or("–".into(), |t| format!("{t:.1}")),
                 ]
+            })
+            .collect();
+        weft_eval::report::markdown_table(&mut s, &header, &rows);
+        let _ = writeln!(
+            s,
+            "\nJoint regions (vertices where the joint and its parent both weigh at least {REGION_MIN_WEIGHT}, left and right), mean cm:\n"
+        );
+        let mut header = vec!["method".to_string()];
+        header.extend(JOINT_REGIONS.iter().map(|(name, _)| name.to_string()));
+        let rows: Vec<Vec<String>> = self
+            .methods
+            .iter()
+            .map(|m| {
+                let mut row = vec![m.name.clone()];
+                row.extend(m.regions_cm.iter().map(|e| format!("{e:.4}")));
+                row
             })
             .collect();
         weft_eval::report::markdown_table(&mut s, &header, &rows);
@@ -372,5 +556,39 @@ impl CharacterTable {
             .collect();
         weft_eval::report::markdown_table(&mut s, &header, &rows);
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn joint_regions_are_the_blend_rings_of_the_named_joints() {
+        // A chain skeleton: joint j's parent is j − 1.
+        let parents: Vec<Option<usize>> = (0..24usize).map(|j| j.checked_sub(1)).collect();
+        let row = |pairs: &[(usize, f32)]| {
+            let mut r = vec![0.0f32; 24];
+            for &(j, w) in pairs {
+                r[j] = w;
+            }
+            r
+        };
+        let weights: Vec<f32> = [
+            row(&[(18, 0.5), (17, 0.5)]),   // left elbow's ring
+            row(&[(18, 1.0)]),              // forearm only
+            row(&[(19, 0.95), (18, 0.05)]), // too little of the parent
+            row(&[(4, 0.3), (3, 0.7)]),     // left knee's ring
+        ]
+        .concat();
+        let regions = joint_regions(&weights, &parents);
+        assert_eq!(regions.len(), JOINT_REGIONS.len());
+        assert_eq!(regions[0], vec![0]);
+        assert_eq!(regions[1], vec![3]);
+        assert!(regions[2].is_empty() && regions[3].is_empty());
+        // Another skeleton has no named regions.
+        assert!(joint_regions(&[1.0, 0.0], &[None, Some(0)])
+            .iter()
+            .all(Vec::is_empty));
     }
 }

@@ -220,9 +220,10 @@ pub fn run(args: &EvalArgs) -> Result<()> {
 }
 
 /// A character dataset: every run (DenseGATs, MultiResGNet) and the LBS/DQS baselines as
-/// seed 001's tables, written to --out (characters.md, characters.json, characters.png).
+/// seed 001's tables, written to --out (characters.md, characters.json, characters.png and
+/// the joint close-ups elbows.png, knees.png, shoulders.png, hips.png).
 fn run_characters(args: &EvalArgs, data: &Path) -> Result<()> {
-    let (table, picture) = weft_pipeline::characters::evaluate_characters(
+    let (table, pictures) = weft_pipeline::characters::evaluate_characters(
         &args.runs,
         data,
         args.split,
@@ -239,7 +240,9 @@ fn run_characters(args: &EvalArgs, data: &Path) -> Result<()> {
         &args.out.join("characters.json"),
         &serde_json::to_string_pretty(&table)?,
     )?;
-    picture.write_png(&args.out.join("characters.png"))?;
+    for (name, picture) in &pictures {
+        picture.write_png(&args.out.join(format!("{name}.png")))?;
+    }
     if args.json {
         emit(&serde_json::to_string_pretty(&table)?)
     } else {
