@@ -89,18 +89,17 @@ fn characters_train_evaluate_and_animate() {
     let table = root.join("table");
     let o = weft(&["eval", s(&run), "--data", s(&data), "--out", s(&table)]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(
-        std::fs::metadata(table.join("characters.png"))
-            .unwrap()
-            .len()
-            > 1000
-    );
+    for picture in ["characters", "elbows", "knees", "shoulders", "hips"] {
+        let path = table.join(format!("{picture}.png"));
+        assert!(std::fs::metadata(&path).unwrap().len() > 1000, "{path:?}");
+    }
     let md = std::fs::read_to_string(table.join("characters.md")).unwrap();
     for row in [
         "LBS (8 influences)",
         "DQS (8 influences)",
         "| run |",
         "c002",
+        "| method | elbows | knees | shoulders | hips |",
     ] {
         assert!(md.contains(row), "{row} missing:\n{md}");
     }
@@ -109,10 +108,21 @@ fn characters_train_evaluate_and_animate() {
             .unwrap();
     let methods = json["methods"].as_array().unwrap();
     assert_eq!(methods.len(), 3);
+    // LBS's errors sit at the joints: every region's mean exceeds its whole-mesh mean.
+    let lbs = &methods[0];
+    assert!(
+        lbs["regions_cm"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|r| r.as_f64().unwrap() > lbs["mean_cm"].as_f64().unwrap()),
+        "{lbs}"
+    );
     for m in methods {
         let mean = m["mean_cm"].as_f64().unwrap();
         assert!(mean.is_finite() && mean > 0.0, "{m}");
         assert!(m["max_cm"].as_f64().unwrap() >= mean);
+        assert_eq!(m["regions_cm"].as_array().unwrap().len(), 4, "{m}");
     }
 
     // Any character mesh on the body: here a t-shirt alone, bound at its shape.
