@@ -53,7 +53,7 @@ impl Features {
 
     /// Row-major `values` of `width` columns; errors when they are not whole rows.
     pub fn new(values: Vec<f32>, width: usize) -> crate::Result<Self> {
-        if width == 0 || values.len() % width != 0 {
+        if width == 0 || !values.len().is_multiple_of(width) {
             return Err(NnError::Config(format!(
                 "{} values are not rows of width {width}",
                 values.len()
