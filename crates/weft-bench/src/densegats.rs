@@ -3,7 +3,10 @@
 //! binds any mesh), per stage: the pose inputs (coarse LBS, normals, features), the
 //! input transform, each dense module with its transition, the output transform, and
 //! the whole frame; beside the dense-layer floor, the multiply–adds of every linear map
-//! (`W`, the self stream, the MLPs) at the rate this CPU's GEMM reaches.
+//! (`W`, the self stream, the MLPs) at the rate this CPU's GEMM reaches. The stages are
+//! those of the inference form evaluation and animation run ([`DenseGatsInference`]);
+//! the network's reference forward (burn layers, as training runs them) is timed whole
+//! beside them.
 //!
 //! The thesis reports about 31 ms per frame on a GPU for a 10 220-vertex character
 //! (§3.2.3.2); the target here is 50 ms on two CPU cores at paper widths.
@@ -11,9 +14,10 @@
 use burn::tensor::{Tensor, TensorData};
 use serde::Serialize;
 use weft_body::BodyModel;
-use weft_models::densegats::{DenseGats, DenseGatsConfig};
+use weft_models::densegats::{DenseGats, DenseGatsConfig, DenseGatsInference};
 use weft_models::refine::{Character, CharacterRig, RefineNet};
 use weft_nn::backend::cpu;
+use weft_nn::infer::Features;
 
 use crate::timing::try_median_ms;
 use crate::{skirt, BenchError, Row};
@@ -56,6 +60,8 @@ pub struct DenseGatsFigures {
     pub output_mlp_ms: f64,
     /// The network alone.
     pub network_ms: f64,
+    /// The network alone, by its reference forward (burn layers).
+    pub reference_ms: f64,
     /// Inputs and network: one frame.
     pub frame_ms: f64,
     /// Multiply–adds of the linear maps at [`GEMM_GFLOPS`], ms.
@@ -80,6 +86,7 @@ impl Row for DenseGatsFigures {
             ),
             ("out MLP", format!("{:.1}", self.output_mlp_ms)),
             ("network", format!("{:.1}", self.network_ms)),
+            ("reference", format!("{:.1}", self.reference_ms)),
             ("frame ms", format!("{:.1}", self.frame_ms)),
             ("floor ms", format!("{:.1}", self.floor_ms)),
         ]
@@ -159,51 +166,42 @@ impl DenseGatsBench {
             .pose_input(&pose, [0.0; 3], cfg.position, cfg.frame)
             .map_err(BenchError::stage("pose inputs"))?
             .features;
-        let x = Tensor::<2>::from_data(TensorData::new(features, [n, 6 + s]), &device);
+        let x = Features::new(features, 6 + s).map_err(BenchError::stage("pose inputs"))?;
         let batch = character.batch();
         let adjacency = batch.adjacency();
-        let sync = |t: Tensor<2>| {
-            let _ = t.into_data();
-        };
         progress("network");
+        let fast: DenseGatsInference = net.inference();
         let nn = BenchError::stage("network");
-        let input_mlp_ms = try_median_ms(reps, || net.input.forward(x.clone()).map(sync))
+        let input_mlp_ms = try_median_ms(reps, || fast.input.forward(&x).map(drop))
             .map_err(BenchError::stage("input transform"))?;
-        let mut h = net
+        let mut h = fast
             .input
-            .forward(x.clone())
+            .forward(&x)
             .map_err(BenchError::stage("input transform"))?;
         let mut modules_ms = Vec::new();
-        for (k, m) in net.modules.iter().enumerate() {
-            let transition = k.checked_sub(1).map(|t| &net.transitions[t]);
-            let step = |h: Tensor<2>| -> Result<Tensor<2>, weft_nn::NnError> {
-                let h = match transition {
-                    Some(t) => t.forward(h, adjacency)?,
-                    None => h,
-                };
-                m.forward(h, adjacency)
-            };
+        for k in 0..fast.modules.len() {
             modules_ms.push(
-                try_median_ms(reps, || step(h.clone()).map(sync))
+                try_median_ms(reps, || fast.module(k, &h, adjacency).map(drop))
                     .map_err(BenchError::stage("dense module"))?,
             );
-            h = step(h).map_err(BenchError::stage("dense module"))?;
+            h = fast
+                .module(k, &h, adjacency)
+                .map_err(BenchError::stage("dense module"))?;
         }
-        let output = |h: Tensor<2>| -> Result<Tensor<2>, weft_nn::NnError> {
-            let h = match &net.hidden {
-                Some(hidden) => hidden.forward(h)?,
-                None => h,
-            };
-            Ok(net.head.forward(h))
-        };
-        let output_mlp_ms = try_median_ms(reps, || output(h.clone()).map(sync))
+        let output_mlp_ms = try_median_ms(reps, || fast.output(&h).map(drop))
             .map_err(BenchError::stage("output transform"))?;
         let network_ms =
-            try_median_ms(reps, || net.forward(x.clone(), batch).map(sync)).map_err(nn)?;
+            try_median_ms(reps, || fast.forward_features(&x, adjacency).map(drop)).map_err(nn)?;
+        let tensor = x.clone().into_tensor(&device);
+        let reference_ms = try_median_ms(reps, || {
+            net.forward(tensor.clone(), batch)
+                .map(|t| drop(t.into_data()))
+        })
+        .map_err(BenchError::stage("reference network"))?;
         let frame_ms = try_median_ms(reps, || {
             let input = character.pose_input(&pose, [0.0; 3], cfg.position, cfg.frame)?;
             let x = Tensor::<2>::from_data(TensorData::new(input.features, [n, 6 + s]), &device);
-            net.forward(x, batch).map(sync)
+            fast.forward(x, batch).map(|t| drop(t.into_data()))
         })
         .map_err(BenchError::stage("frame"))?;
         let parameters = burn::module::Module::num_params(&net);
@@ -218,6 +216,7 @@ impl DenseGatsBench {
             modules_ms,
             output_mlp_ms,
             network_ms,
+            reference_ms,
             frame_ms,
             floor_ms: flops_per_node(&cfg, &net) * n as f64 / (GEMM_GFLOPS * 1e6),
         })

@@ -44,7 +44,7 @@ pub struct NormedGat {
     /// Normalisation of the block output, or none.
     pub norm: Option<BatchNorm>,
     #[module(skip)]
-    activation: Activation,
+    pub(crate) activation: Activation,
 }
 
 impl NormedGatConfig {
@@ -180,7 +180,7 @@ pub struct DenseGatModule {
     /// The blocks, in order.
     pub blocks: Vec<NormedGat>,
     #[module(skip)]
-    dense: bool,
+    pub(crate) dense: bool,
 }
 
 impl DenseGatModule {

@@ -4,6 +4,8 @@
 //!   backward, the generic reference path, and the [`GatBlock`] layer.
 //! - [`dense`]: GAT block → batch norm → σ ([`NormedGat`]) and the densely connected
 //!   modules of seed 001 ([`DenseGatModule`], eq. 3.6).
+//! - [`infer`]: inference-only forms of the MLP, GAT block and dense module on host
+//!   buffers (batch norm and σ fused into the output pass), for evaluation and animation.
 //! - [`adjacency`]: the destination-major adjacency (self-loops, transpose) GAT runs on.
 //! - [`backend`]: the devices (flex CPU by default; wgpu / cuda behind features).
 //! - [`activation`]: the nonlinearities the papers name.
@@ -26,6 +28,7 @@ pub mod dense;
 pub mod error;
 mod flex;
 pub mod gat;
+pub mod infer;
 pub mod init;
 pub mod lstm;
 pub mod mlp;

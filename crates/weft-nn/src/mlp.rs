@@ -40,9 +40,9 @@ pub struct Mlp {
     /// One batch normalisation per layer, or none.
     pub norms: Vec<BatchNorm>,
     #[module(skip)]
-    activation: Activation,
+    pub(crate) activation: Activation,
     #[module(skip)]
-    output_activation: Activation,
+    pub(crate) output_activation: Activation,
 }
 
 impl MlpConfig {

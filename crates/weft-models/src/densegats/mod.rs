@@ -11,6 +11,9 @@
 //! connections (`dense = false`), and the original GAT and NeuroSkinning-style networks
 //! (one module of 4 or 3 plain blocks, no self stream, ELU; D10).
 //!
+//! Evaluation and animation run [`DenseGatsInference`] ([`inference`]), the same network
+//! on weft-nn's fused inference forms.
+//!
 //! The network outputs the correction in centimetres, the unit the thesis reports: a
 //! correction of a few millimetres is then of order 0.1–1, where the last layer's
 //! initialisation starts.
@@ -23,6 +26,10 @@ use weft_nn::{Activation, DenseGatModule, DenseGatModuleConfig, GraphBatch, Mlp,
 
 use crate::error::ModelError;
 use crate::refine::{nn_error as nn, tanh_mlp, Frame, PositionFeature, RefineNet};
+
+mod inference;
+
+pub use inference::DenseGatsInference;
 
 /// Configuration of [`DenseGats`].
 #[derive(Config, Debug, PartialEq)]
@@ -228,6 +235,10 @@ impl crate::refine::RefineConfig for DenseGatsConfig {
 
     fn joints(&self) -> usize {
         self.joints
+    }
+
+    fn inference(&self, net: DenseGats) -> Box<dyn RefineNet + Send + Sync> {
+        Box::new(net.inference())
     }
 }
 

@@ -61,6 +61,11 @@ pub trait RefineConfig: serde::de::DeserializeOwned {
     fn influences(&self) -> usize;
     /// Joints of the skeleton (node features are `6 + S` wide).
     fn joints(&self) -> usize;
+    /// The network as evaluation and animation run it: a faster form with the same
+    /// values where the model has one (DenseGATs), else the network itself.
+    fn inference(&self, net: Self::Net) -> Box<dyn RefineNet + Send + Sync> {
+        Box::new(net)
+    }
 }
 
 /// A refinement network: normalised node features `[N, 6 + S]` on the graph `graph` (a

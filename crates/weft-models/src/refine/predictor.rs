@@ -86,7 +86,7 @@ fn load_net<C: RefineConfig>(
         .map_err(|e| run_err(path, format!("[model]: {e}")))?;
     let net = load_record(cfg.build(device)?, checkpoint)?;
     Ok((
-        Box::new(net),
+        cfg.inference(net),
         Reads {
             position: cfg.position(),
             frame: cfg.frame(),

@@ -13,7 +13,7 @@
 mod backward;
 mod block;
 mod fused;
-mod kernel;
+pub(crate) mod kernel;
 pub mod reference;
 
 use std::sync::Arc;
