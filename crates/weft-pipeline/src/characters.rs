@@ -318,20 +318,12 @@ pub fn evaluate_characters(
             total.merge(&acc);
         }
     }
-    // The two poses where LBS (the first method) is worst on average.
-    let frames = worst_frames(&shown[0], &shown_truth);
     let names: Vec<String> = methods.iter().map(Method::name).collect();
-    let columns: Vec<MethodFrames<'_>> = names
-        .iter()
-        .zip(&shown)
-        .map(|(name, frames)| MethodFrames { name, frames })
-        .collect();
-    let picture = comparison_sheet(
+    let picture = worst_poses_sheet(
         &shown_faces,
         &shown_truth,
-        &columns,
-        None,
-        &frames,
+        &names,
+        &shown,
         420,
         &format!(
             "{}: truth, then each method coloured by its distance to the truth",
@@ -413,18 +405,11 @@ pub fn evaluate_characters(
             };
             let truth = crop(&shown_truth);
             let cropped: Vec<Vec<Vec<[f32; 3]>>> = shown.iter().map(|m| crop(m)).collect();
-            let frames = worst_frames(&cropped[0], &truth);
-            let columns: Vec<MethodFrames<'_>> = names
-                .iter()
-                .zip(&cropped)
-                .map(|(name, frames)| MethodFrames { name, frames })
-                .collect();
-            let image = comparison_sheet(
+            let image = worst_poses_sheet(
                 &faces,
                 &truth,
-                &columns,
-                None,
-                &frames,
+                &names,
+                &cropped,
                 360,
                 &format!(
                     "{}: left {} (within {} cm), truth, then each method coloured by its distance to the truth",
@@ -453,6 +438,27 @@ fn crop_faces(faces: &[[u32; 3]], keep: &[usize], vertices: usize) -> Vec<[u32; 
             g.iter().all(|&v| v != u32::MAX).then_some(g)
         })
         .collect()
+}
+
+/// The truth and every method (`frames[m]`, named `names[m]`) in the two poses where the
+/// first method (LBS) is worst, coloured by distance to the truth on one scale.
+fn worst_poses_sheet(
+    faces: &[[u32; 3]],
+    truth: &[Vec<[f32; 3]>],
+    names: &[String],
+    frames: &[Vec<Vec<[f32; 3]>>],
+    tile: u32,
+    title: &str,
+) -> Result<Image, PipelineError> {
+    let columns: Vec<MethodFrames<'_>> = names
+        .iter()
+        .zip(frames)
+        .map(|(name, frames)| MethodFrames { name, frames })
+        .collect();
+    let worst = worst_frames(&frames[0], truth);
+    Ok(comparison_sheet(
+        faces, truth, &columns, None, &worst, tile, title,
+    )?)
 }
 
 /// The two frames where `method` is farthest from `truth` on average.
