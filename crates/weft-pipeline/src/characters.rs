@@ -125,6 +125,8 @@ struct Accumulator {
     max: f64,
     min: f64,
     histogram: Vec<u64>,
+    /// Summed distance and vertex count per joint region of [`JOINT_REGIONS`].
+    regions: Vec<(f64, usize)>,
 }
 
 impl Accumulator {
@@ -132,12 +134,20 @@ impl Accumulator {
         Accumulator {
             min: f64::INFINITY,
             histogram: vec![0; HISTOGRAM_EDGES_CM.len() + 1],
+            regions: vec![(0.0, 0); JOINT_REGIONS.len()],
             ..Default::default()
         }
     }
 
-    /// Adds the distances of `predicted` to `truth` moved by `shift` and returns them (cm).
-    fn add(&mut self, predicted: &[[f64; 3]], truth: &[[f32; 3]], shift: [f64; 3]) -> Vec<f64> {
+    /// Adds the distances of `predicted` to `truth` moved by `shift` (cm), over the
+    /// whole mesh and over each region's vertices (`regions`, from [`joint_regions`]).
+    fn add(
+        &mut self,
+        predicted: &[[f64; 3]],
+        truth: &[[f32; 3]],
+        shift: [f64; 3],
+        regions: &[Vec<usize>],
+    ) {
         let distances: Vec<f64> = predicted
             .iter()
             .zip(truth)
@@ -160,7 +170,10 @@ impl Accumulator {
                 .unwrap_or(HISTOGRAM_EDGES_CM.len());
             self.histogram[bin] += 1;
         }
-        distances
+        for (region, (sum, count)) in regions.iter().zip(&mut self.regions) {
+            *sum += region.iter().map(|&v| distances[v]).sum::<f64>();
+            *count += region.len();
+        }
     }
 
     fn merge(&mut self, other: &Accumulator) {
@@ -171,6 +184,24 @@ impl Accumulator {
         for (a, b) in self.histogram.iter_mut().zip(&other.histogram) {
             *a += b;
         }
+        for ((sum, count), (s, c)) in self.regions.iter_mut().zip(&other.regions) {
+            *sum += s;
+            *count += c;
+        }
+    }
+
+    /// Mean distance per region, NaN where no vertex was in it.
+    fn region_means(&self) -> Vec<f64> {
+        self.regions
+            .iter()
+            .map(|&(sum, count)| {
+                if count == 0 {
+                    f64::NAN
+                } else {
+                    sum / count as f64
+                }
+            })
+            .collect()
     }
 
     fn mean(&self) -> f64 {
@@ -252,8 +283,6 @@ pub fn evaluate_characters(
         .iter()
         .map(|_| (Vec::new(), Accumulator::new(), 0.0, 0))
         .collect();
-    // Per method and region: summed distance and vertex count.
-    let mut region_sums = vec![vec![(0.0f64, 0usize); JOINT_REGIONS.len()]; methods.len()];
     // The first character's frames of every method, for the picture.
     let mut shown: Vec<Vec<Vec<[f32; 3]>>> = methods.iter().map(|_| Vec::new()).collect();
     let mut shown_truth: Vec<Vec<[f32; 3]>> = Vec::new();
@@ -276,11 +305,8 @@ pub fn evaluate_characters(
                 })
                 .collect();
         }
-        for (((m, (rows, total, seconds, frames)), kept), sums) in methods
-            .iter()
-            .zip(&mut out)
-            .zip(&mut shown)
-            .zip(&mut region_sums)
+        for ((m, (rows, total, seconds, frames)), kept) in
+            methods.iter().zip(&mut out).zip(&mut shown)
         {
             let character = Character::new(rig.clone(), m.influences())?;
             let mut acc = Accumulator::new();
@@ -298,11 +324,7 @@ pub fn evaluate_characters(
                         x
                     }
                 };
-                let distances = acc.add(&predicted, truth, translation);
-                for (region, (sum, count)) in regions.iter().zip(sums.iter_mut()) {
-                    *sum += region.iter().map(|&v| distances[v]).sum::<f64>();
-                    *count += region.len();
-                }
+                acc.add(&predicted, truth, translation, &regions);
                 if index == 0 {
                     kept.push(predicted.iter().map(|p| p.map(|x| x as f32)).collect());
                 }
@@ -337,28 +359,16 @@ pub fn evaluate_characters(
         methods: methods
             .iter()
             .zip(out)
-            .zip(&region_sums)
-            .map(
-                |((m, (characters, acc, seconds, frames)), sums)| MethodErrors {
-                    name: m.name(),
-                    characters,
-                    mean_cm: acc.mean(),
-                    max_cm: acc.max,
-                    min_cm: acc.min,
-                    histogram: acc.histogram,
-                    ms_per_frame: (frames > 0).then(|| 1000.0 * seconds / frames as f64),
-                    regions_cm: sums
-                        .iter()
-                        .map(|&(sum, count)| {
-                            if count == 0 {
-                                f64::NAN
-                            } else {
-                                sum / count as f64
-                            }
-                        })
-                        .collect(),
-                },
-            )
+            .map(|(m, (characters, acc, seconds, frames))| MethodErrors {
+                name: m.name(),
+                characters,
+                mean_cm: acc.mean(),
+                max_cm: acc.max,
+                min_cm: acc.min,
+                regions_cm: acc.region_means(),
+                histogram: acc.histogram,
+                ms_per_frame: (frames > 0).then(|| 1000.0 * seconds / frames as f64),
+            })
             .collect(),
     };
     let mut pictures = vec![("characters".to_string(), picture)];
