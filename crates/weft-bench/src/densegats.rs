@@ -15,7 +15,7 @@ use burn::tensor::{Tensor, TensorData};
 use serde::Serialize;
 use weft_body::BodyModel;
 use weft_models::densegats::{DenseGats, DenseGatsConfig, DenseGatsInference};
-use weft_models::refine::{Character, CharacterRig, RefineNet};
+use weft_models::refine::{Character, CharacterRig, RefineConfig, RefineNet};
 use weft_nn::backend::cpu;
 use weft_nn::infer::Features;
 
@@ -158,12 +158,12 @@ impl DenseGatsBench {
         let reps = self.reps;
         let inputs_ms = try_median_ms(reps, || {
             character
-                .pose_input(&pose, [0.0; 3], cfg.position, cfg.frame)
+                .pose_input(&pose, [0.0; 3], cfg.inputs())
                 .map(|_| ())
         })
         .map_err(BenchError::stage("pose inputs"))?;
         let features = character
-            .pose_input(&pose, [0.0; 3], cfg.position, cfg.frame)
+            .pose_input(&pose, [0.0; 3], cfg.inputs())
             .map_err(BenchError::stage("pose inputs"))?
             .features;
         let x = Features::new(features, 6 + s).map_err(BenchError::stage("pose inputs"))?;
@@ -199,7 +199,7 @@ impl DenseGatsBench {
         })
         .map_err(BenchError::stage("reference network"))?;
         let frame_ms = try_median_ms(reps, || {
-            let input = character.pose_input(&pose, [0.0; 3], cfg.position, cfg.frame)?;
+            let input = character.pose_input(&pose, [0.0; 3], cfg.inputs())?;
             let x = Tensor::<2>::from_data(TensorData::new(input.features, [n, 6 + s]), &device);
             fast.forward(x, batch).map(|t| drop(t.into_data()))
         })

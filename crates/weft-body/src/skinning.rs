@@ -127,8 +127,11 @@ impl SkinWeights {
     }
 }
 
-/// The skinning method.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+/// The skinning method (in configs: `lbs`, `dqs`).
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
 pub enum Skinning {
     /// Linear blend skinning (SMPL's).
     #[default]

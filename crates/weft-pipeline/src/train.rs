@@ -165,11 +165,7 @@ pub fn train_refine<M: ModelSettings + RefineConfig>(
     spec: &TrainSpec,
     log: &mut dyn FnMut(&str),
 ) -> Result<Outcome, PipelineError> {
-    let (position, frame, influences) = (
-        cfg.model.position(),
-        cfg.model.frame(),
-        cfg.model.influences(),
-    );
+    let (inputs, influences) = (cfg.model.inputs(), cfg.model.influences());
     let set = CharacterSet::open(&spec.data).map_err(stage(&format!(
         "opening the character dataset {}",
         spec.data.display()
@@ -186,7 +182,7 @@ pub fn train_refine<M: ModelSettings + RefineConfig>(
     let normalizer = if spec.resume && normalizer_path.exists() {
         weft_models::refine::read_normalizer(&normalizer_path)?
     } else {
-        let n = fit_normalizer(&train_chars, position, frame)
+        let n = fit_normalizer(&train_chars, inputs)
             .map_err(stage("fitting the feature normaliser"))?;
         save_normalizer(&spec.out, &n)?;
         n
@@ -195,7 +191,7 @@ pub fn train_refine<M: ModelSettings + RefineConfig>(
     let characters = train_chars.len();
     let mut task: RefineTask<M::Net> = RefineTask::new(
         &cfg.train.task,
-        (position, frame),
+        inputs,
         train_chars,
         validation,
         normalizer,

@@ -43,7 +43,6 @@ pub struct SequenceOptions {
     /// `sim.newton.max_iterations` there to keep the sequence budget.
     pub sim: SimOptions,
     /// How the body is posed (in TOML: `lbs`, `dqs`). Default: [`Skinning::Lbs`].
-    #[serde(with = "SkinningDef")]
     pub skinning: Skinning,
     /// A garment vertex deeper than this inside the rest-pose body (m) makes the input
     /// invalid; shallower ones are moved out to the surface (plus the collision
@@ -59,14 +58,6 @@ pub struct SequenceOptions {
     /// attachment's: straps, a belt, a sewn-on patch, or a whole garment held in place
     /// with `attachment = "none"`. Default: none.
     pub pinned: Vec<u32>,
-}
-
-/// [`Skinning`]'s serde form (weft-body has no serde): `lbs` or `dqs`.
-#[derive(serde::Serialize, serde::Deserialize)]
-#[serde(remote = "Skinning", rename_all = "snake_case")]
-enum SkinningDef {
-    Lbs,
-    Dqs,
 }
 
 /// Newton iterations per sub-step in a sequence: a fixed budget (the energy still

@@ -22,10 +22,11 @@ use burn::config::Config;
 use burn::module::Module;
 use burn::nn::{Linear, LinearConfig};
 use burn::tensor::{Device, Tensor};
+use weft_body::Skinning;
 use weft_nn::{Activation, DenseGatModule, DenseGatModuleConfig, GraphBatch, Mlp, NormedGat};
 
 use crate::error::ModelError;
-use crate::refine::{nn_error as nn, tanh_mlp, Frame, PositionFeature, RefineNet};
+use crate::refine::{nn_error as nn, tanh_mlp, Frame, InputSpec, PositionFeature, RefineNet};
 
 mod inference;
 
@@ -44,7 +45,11 @@ pub struct DenseGatsConfig {
     /// config names none is a world-axes run).
     #[config(default = "Frame::World")]
     pub frame: Frame,
-    /// Influences per vertex of the coarse LBS (§3.2.3.1: at most eight).
+    /// The coarse skinning the network corrects: LBS (eq. 3.1, the thesis) or DQS, whose
+    /// joints start closer to a volume-keeping truth.
+    #[config(default = "Skinning::Lbs")]
+    pub coarse: Skinning,
+    /// Influences per vertex of the coarse skinning (§3.2.3.1: at most eight).
     #[config(default = 8)]
     pub influences: usize,
     /// Widths of the input transform.
@@ -83,11 +88,13 @@ pub struct DenseGatsConfig {
 impl DenseGatsConfig {
     /// The preset `name`: `paper` (§3.2.3.2's widths) or `cpu` (the same shape, narrower:
     /// 2 modules of 3 blocks, 4 channels × 4 heads, output (128, 64)), so a tiny dataset
-    /// trains in minutes on two cores.
+    /// trains in minutes on two cores Read in the skinning frame: on the tiny set it took the
+    /// joints well below LBS where world axes stayed near it (docs/characters.md).
     pub fn preset(name: &str) -> Result<Self, ModelError> {
         match name {
             "paper" => Ok(Self::new()),
             "cpu" => Ok(Self::new()
+                .with_frame(Frame::Skinning)
                 .with_modules(2)
                 .with_blocks(3)
                 .with_channels(4)
@@ -213,6 +220,10 @@ impl RefineNet for DenseGats {
 impl crate::refine::RefineConfig for DenseGatsConfig {
     type Net = DenseGats;
 
+    fn defaults() -> Self {
+        Self::new()
+    }
+
     fn check(&self) -> Result<(), ModelError> {
         self.validate()
     }
@@ -221,12 +232,12 @@ impl crate::refine::RefineConfig for DenseGatsConfig {
         self.init(device)
     }
 
-    fn position(&self) -> PositionFeature {
-        self.position
-    }
-
-    fn frame(&self) -> Frame {
-        self.frame
+    fn inputs(&self) -> InputSpec {
+        InputSpec {
+            coarse: self.coarse,
+            position: self.position,
+            frame: self.frame,
+        }
     }
 
     fn influences(&self) -> usize {

@@ -23,13 +23,14 @@ use burn::config::Config;
 use burn::module::Module;
 use burn::nn::{Linear, LinearConfig};
 use burn::tensor::{Device, Tensor};
+use weft_body::Skinning;
 use weft_nn::{
     edge_unpool, Activation, DenseGatModule, DenseGatModuleConfig, EdgePool, EdgePoolConfig,
     GraphBatch, Mlp, NormedGat,
 };
 
 use crate::error::ModelError;
-use crate::refine::{nn_error as nn, tanh_mlp, Frame, PositionFeature, RefineNet};
+use crate::refine::{nn_error as nn, tanh_mlp, Frame, InputSpec, PositionFeature, RefineNet};
 
 /// Configuration of [`MultiResGnet`].
 #[derive(Config, Debug, PartialEq)]
@@ -44,7 +45,11 @@ pub struct MultiResGnetConfig {
     /// config names none is a world-axes run).
     #[config(default = "Frame::World")]
     pub frame: Frame,
-    /// Influences per vertex of the coarse LBS (§3.3.3.1: at most four).
+    /// The coarse skinning the network corrects: LBS (eq. 3.1, the thesis) or DQS, whose
+    /// joints start closer to a volume-keeping truth.
+    #[config(default = "Skinning::Lbs")]
+    pub coarse: Skinning,
+    /// Influences per vertex of the coarse skinning (§3.3.3.1: at most four).
     #[config(default = 4)]
     pub influences: usize,
     /// Widths of the input transform.
@@ -89,11 +94,13 @@ impl MultiResGnetConfig {
 
     /// The preset `name`: `paper` (§3.3.3.2's widths) or `cpu` (the same shape, narrower:
     /// 3 local blocks, 8 channels × 4 heads, output (128, 64)), so a tiny dataset trains
-    /// in minutes on two cores.
+    /// in minutes on two cores Read in the skinning frame: on the tiny set it took the
+    /// joints well below LBS where world axes stayed near it (docs/characters.md).
     pub fn preset(name: &str) -> Result<Self, ModelError> {
         match name {
             "paper" => Ok(Self::new()),
             "cpu" => Ok(Self::new()
+                .with_frame(Frame::Skinning)
                 .with_local_blocks(3)
                 .with_channels(8)
                 .with_heads(4)
@@ -268,6 +275,10 @@ impl RefineNet for MultiResGnet {
 impl crate::refine::RefineConfig for MultiResGnetConfig {
     type Net = MultiResGnet;
 
+    fn defaults() -> Self {
+        Self::new()
+    }
+
     fn check(&self) -> Result<(), ModelError> {
         self.validate()
     }
@@ -276,12 +287,12 @@ impl crate::refine::RefineConfig for MultiResGnetConfig {
         self.init(device)
     }
 
-    fn position(&self) -> PositionFeature {
-        self.position
-    }
-
-    fn frame(&self) -> Frame {
-        self.frame
+    fn inputs(&self) -> InputSpec {
+        InputSpec {
+            coarse: self.coarse,
+            position: self.position,
+            frame: self.frame,
+        }
     }
 
     fn influences(&self) -> usize {

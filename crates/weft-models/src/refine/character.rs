@@ -2,8 +2,8 @@
 //! the model's influence count, skeleton, mesh graph, and the per-vertex inputs that do
 //! not change with the pose (seed 001 §3.2.1's volumetric joint distances `x_i`).
 //!
-//! Per pose it gives the coarse mesh (LBS with the top-k influences renormalised, or DQS)
-//! and the node features `[p_i | r_i(θ), n_i, x_i]` the networks read (§3.2.1, §3.3.1):
+//! Per pose it gives the coarse mesh (LBS with the top-k influences renormalised, as
+//! eq. 3.1, or DQS with the same influences) and the node features `[p_i | r_i(θ), n_i, x_i]` the networks read (§3.2.1, §3.3.1):
 //! positions and normals of the coarse mesh (thesis-reference D8: the graph is built on
 //! `M_coarse`), or in place of positions the relative skinning descriptor of eq. 3.9,
 //! which is LBS without translations and so does not change when the character moves.
@@ -72,6 +72,18 @@ pub enum Frame {
     /// Each vertex's DQS frame: positions `R_iᵀ (p_i − t_i)`, descriptors and normals
     /// `R_iᵀ v`, corrections predicted as `δ_i` and applied as `R_i δ_i`.
     Skinning,
+}
+
+/// How a model reads a pose: the coarse deformation it corrects, what stands in for
+/// positions, and the frame (its config's `coarse`, `position` and `frame`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct InputSpec {
+    /// The coarse skinning, LBS (eq. 3.1) or DQS.
+    pub coarse: Skinning,
+    /// What stands in for positions in the node features.
+    pub position: PositionFeature,
+    /// The frame of the features and corrections.
+    pub frame: Frame,
 }
 
 /// A [`CharacterRig`] prepared for one model (see the module documentation).
@@ -257,16 +269,21 @@ impl Character {
         }
     }
 
-    /// The LBS coarse mesh and node features of `pose` at `translation`, in `frame`.
+    /// The coarse mesh and node features of `pose` at `translation`, as `spec` reads
+    /// them.
     pub fn pose_input(
         &self,
         pose: &Pose,
         translation: [f64; 3],
-        position: PositionFeature,
-        frame: Frame,
+        spec: InputSpec,
     ) -> Result<PoseInput, ModelError> {
+        let InputSpec {
+            coarse,
+            position,
+            frame,
+        } = spec;
         let transforms = self.transforms(pose, translation)?;
-        let coarse = self.coarse(&transforms, Skinning::Lbs);
+        let coarse = self.coarse(&transforms, coarse);
         let first: Vec<[f64; 3]> = match position {
             PositionFeature::Position => coarse.clone(),
             PositionFeature::Descriptor => descriptor_from_transforms(
@@ -318,6 +335,15 @@ impl Character {
 mod tests {
     use super::*;
 
+    /// LBS-coarse inputs reading `position` in `frame`.
+    fn spec(position: PositionFeature, frame: Frame) -> InputSpec {
+        InputSpec {
+            coarse: Skinning::Lbs,
+            position,
+            frame,
+        }
+    }
+
     /// A two-triangle strip skinned to two joints.
     pub(crate) fn strip() -> CharacterRig {
         CharacterRig {
@@ -347,35 +373,62 @@ mod tests {
         };
         // The test rig has 2 joints: a 24-joint pose is refused by name.
         assert!(c
-            .pose_input(&pose, [0.0; 3], PositionFeature::Position, Frame::World)
+            .pose_input(
+                &pose,
+                [0.0; 3],
+                spec(PositionFeature::Position, Frame::World)
+            )
             .is_err());
         let c = Character::new(strip24(), 4).unwrap();
         let a = c
-            .pose_input(&pose, [0.0; 3], PositionFeature::Descriptor, Frame::World)
+            .pose_input(
+                &pose,
+                [0.0; 3],
+                spec(PositionFeature::Descriptor, Frame::World),
+            )
             .unwrap();
         let b = c
             .pose_input(
                 &pose,
                 [3.0, 1.0, 0.0],
-                PositionFeature::Descriptor,
-                Frame::World,
+                spec(PositionFeature::Descriptor, Frame::World),
             )
             .unwrap();
         assert_eq!(a.features, b.features);
         assert_ne!(a.coarse, b.coarse);
         let p = c
-            .pose_input(&pose, [0.0; 3], PositionFeature::Position, Frame::World)
+            .pose_input(
+                &pose,
+                [0.0; 3],
+                spec(PositionFeature::Position, Frame::World),
+            )
             .unwrap();
         let q = c
             .pose_input(
                 &pose,
                 [3.0, 1.0, 0.0],
-                PositionFeature::Position,
-                Frame::World,
+                spec(PositionFeature::Position, Frame::World),
             )
             .unwrap();
         assert_ne!(p.features, q.features);
         assert_eq!(p.features.len(), 4 * 30);
+        // A DQS-coarse model corrects (and reads the positions and normals of) DQS.
+        let d = c
+            .pose_input(
+                &pose,
+                [0.0; 3],
+                InputSpec {
+                    coarse: Skinning::Dqs,
+                    ..spec(PositionFeature::Position, Frame::World)
+                },
+            )
+            .unwrap();
+        let transforms = c.transforms(&pose, [0.0; 3]).unwrap();
+        assert_eq!(d.coarse, c.coarse(&transforms, Skinning::Dqs));
+        assert_ne!(d.coarse, p.coarse);
+        for (row, x) in d.features.chunks_exact(30).zip(&d.coarse) {
+            assert!((0..3).all(|k| (row[k] - x[k] as f32).abs() < 1e-6));
+        }
     }
 
     /// The strip's rig on a 24-joint skeleton (joint 1 at x = 1), weights ramping from
@@ -409,20 +462,20 @@ mod tests {
         turned[0] = [0.4, -1.1, 0.7];
         for position in [PositionFeature::Position, PositionFeature::Descriptor] {
             let a = c
-                .pose_input(&pose, [0.0; 3], position, Frame::Skinning)
+                .pose_input(&pose, [0.0; 3], spec(position, Frame::Skinning))
                 .unwrap();
             let b = c
-                .pose_input(&turned, [3.0, 1.0, -2.0], position, Frame::Skinning)
+                .pose_input(&turned, [3.0, 1.0, -2.0], spec(position, Frame::Skinning))
                 .unwrap();
             for (x, y) in a.features.iter().zip(&b.features) {
                 assert!((x - y).abs() < 1e-5, "{position:?}: {x} vs {y}");
             }
             // The world-axes features do change when the root turns.
             let w = c
-                .pose_input(&pose, [0.0; 3], position, Frame::World)
+                .pose_input(&pose, [0.0; 3], spec(position, Frame::World))
                 .unwrap();
             let v = c
-                .pose_input(&turned, [0.0; 3], position, Frame::World)
+                .pose_input(&turned, [0.0; 3], spec(position, Frame::World))
                 .unwrap();
             assert!(w
                 .features
@@ -442,7 +495,11 @@ mod tests {
             .into_iter()
             .map(|frame| {
                 let input = c
-                    .pose_input(&turned, [3.0, 1.0, -2.0], PositionFeature::Position, frame)
+                    .pose_input(
+                        &turned,
+                        [3.0, 1.0, -2.0],
+                        spec(PositionFeature::Position, frame),
+                    )
                     .unwrap();
                 let truth: Vec<[f32; 3]> = input
                     .coarse

@@ -1,7 +1,8 @@
 //! Learned refinement of skinning (seed 001 ch. 3, case 1): a character whose body and
 //! tight clothes are one mesh is skinned coarsely (LBS with a few influences) and a
 //! graph network on the coarse mesh predicts each vertex's correction to a nonlinear
-//! deformation, `M = M_coarse + W(G; Ψ)` (eq. 3.1). Per frame, no history.
+//! deformation, `M = M_coarse + W(G; Ψ)` (eq. 3.1; DQS as the coarse mesh is an
+//! option). Per frame, no history.
 //!
 //! - [`character`]: the rig, the coarse deformation and the node features;
 //! - [`RefineNet`]: what DenseGATs ([`crate::densegats`]) and MultiResGNet
@@ -19,7 +20,7 @@ use weft_nn::{Activation, FeatureNormalizer, GraphBatch, Mlp, MlpConfig};
 
 use crate::error::ModelError;
 
-pub use character::{Character, CharacterRig, Frame, PoseInput, PositionFeature};
+pub use character::{Character, CharacterRig, Frame, InputSpec, PoseInput, PositionFeature};
 pub use predictor::RefinePredictor;
 
 /// The feature normaliser's file in a run directory (fitted on the training characters
@@ -46,18 +47,19 @@ pub const CM_PER_M: f64 = 100.0;
 /// A refinement model's configuration: what building, loading and feeding its network
 /// needs, so the predictor, the training pipeline and the benches treat DenseGATs and
 /// MultiResGNet alike.
-pub trait RefineConfig: serde::de::DeserializeOwned {
+pub trait RefineConfig: serde::Serialize + serde::de::DeserializeOwned {
     /// The network.
     type Net: burn::module::Module + Clone + RefineNet + Send + Sync + 'static;
+    /// Every key at its default: what a run's config.toml made before a key existed
+    /// means for that key.
+    fn defaults() -> Self;
     /// Checks the values; errors name the field.
     fn check(&self) -> Result<(), ModelError>;
     /// Builds the network on `device`.
     fn build(&self, device: &Device) -> Result<Self::Net, ModelError>;
-    /// What stands in for positions in the node features.
-    fn position(&self) -> PositionFeature;
-    /// The frame of the features and corrections.
-    fn frame(&self) -> Frame;
-    /// Influences per vertex of the coarse LBS.
+    /// How the model reads a pose: coarse skinning, position feature, frame.
+    fn inputs(&self) -> InputSpec;
+    /// Influences per vertex of the coarse skinning.
     fn influences(&self) -> usize;
     /// Joints of the skeleton (node features are `6 + S` wide).
     fn joints(&self) -> usize;

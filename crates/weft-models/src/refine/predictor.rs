@@ -19,7 +19,7 @@ use weft_garment::FitBody;
 use weft_mesh::TriMesh;
 use weft_nn::FeatureNormalizer;
 
-use super::character::{Character, CharacterRig, Frame, PositionFeature};
+use super::character::{Character, CharacterRig, InputSpec};
 use super::{read_normalizer, RefineConfig, RefineNet, NORMALIZER_FILE};
 use crate::deformer::{Clip, Deformer, Frames};
 use crate::densegats::DenseGatsConfig;
@@ -33,8 +33,7 @@ pub struct RefinePredictor {
     kind: ModelKind,
     net: Box<dyn RefineNet + Send + Sync>,
     normalizer: FeatureNormalizer,
-    position: PositionFeature,
-    frame: Frame,
+    inputs: InputSpec,
     influences: usize,
     device: Device,
     checkpoint: PathBuf,
@@ -65,31 +64,35 @@ fn load_record<M: Module>(fresh: M, checkpoint: &Path) -> Result<M, ModelError> 
 
 /// What a loaded refinement network reads.
 struct Reads {
-    position: PositionFeature,
-    frame: Frame,
+    inputs: InputSpec,
     influences: usize,
     joints: usize,
+}
+
+/// A run's `[model]` table (`path` names config.toml in errors), checked. Keys added
+/// since the run was made (`frame`, `coarse`) read as their defaults, which are what
+/// the model did before the key existed; unknown keys are refused by name.
+fn model_config<C: RefineConfig>(model: &toml::Table, path: &Path) -> Result<C, ModelError> {
+    let cfg: C = weft_config::overlay(&C::defaults(), model, &path.display().to_string(), "model")?;
+    cfg.check()
+        .map_err(|e| run_err(path, format!("[model]: {e}")))?;
+    Ok(cfg)
 }
 
 /// The network of `[model]` (`path` names config.toml in errors) with the parameters
 /// of `checkpoint`, and what it reads.
 fn load_net<C: RefineConfig>(
-    model: toml::Table,
+    model: &toml::Table,
     path: &Path,
     checkpoint: &Path,
     device: &Device,
 ) -> Result<(Box<dyn RefineNet + Send + Sync>, Reads), ModelError> {
-    let cfg: C = model
-        .try_into()
-        .map_err(|e: toml::de::Error| run_err(path, format!("[model]: {e}")))?;
-    cfg.check()
-        .map_err(|e| run_err(path, format!("[model]: {e}")))?;
+    let cfg: C = model_config(model, path)?;
     let net = load_record(cfg.build(device)?, checkpoint)?;
     Ok((
         cfg.inference(net),
         Reads {
-            position: cfg.position(),
-            frame: cfg.frame(),
+            inputs: cfg.inputs(),
             influences: cfg.influences(),
             joints: cfg.joints(),
         },
@@ -111,10 +114,10 @@ impl RefinePredictor {
         let checkpoint = latest_checkpoint(dir)?;
         let (net, reads) = match header.model {
             ModelKind::DenseGats => {
-                load_net::<DenseGatsConfig>(model, &path, &checkpoint, &device)?
+                load_net::<DenseGatsConfig>(&model, &path, &checkpoint, &device)?
             }
             ModelKind::MultiResGnet => {
-                load_net::<MultiResGnetConfig>(model, &path, &checkpoint, &device)?
+                load_net::<MultiResGnetConfig>(&model, &path, &checkpoint, &device)?
             }
             other => {
                 return Err(run_err(
@@ -141,8 +144,7 @@ impl RefinePredictor {
             kind: header.model,
             net,
             normalizer,
-            position: reads.position,
-            frame: reads.frame,
+            inputs: reads.inputs,
             influences: reads.influences,
             device,
             checkpoint,
@@ -154,20 +156,20 @@ impl RefinePredictor {
         self.influences
     }
 
-    /// The position feature the model reads.
-    pub fn position(&self) -> PositionFeature {
-        self.position
+    /// How the model reads a pose.
+    pub fn inputs(&self) -> InputSpec {
+        self.inputs
     }
 
     /// `character` (prepared with [`Self::influences`]) in `pose` with the root at
-    /// `translation`: the coarse LBS mesh plus the network's correction.
+    /// `translation`: the coarse mesh plus the network's correction.
     pub fn predict(
         &self,
         character: &Character,
         pose: &Pose,
         translation: [f64; 3],
     ) -> Result<Vec<[f64; 3]>, ModelError> {
-        let mut input = character.pose_input(pose, translation, self.position, self.frame)?;
+        let mut input = character.pose_input(pose, translation, self.inputs)?;
         let mut features = std::mem::take(&mut input.features);
         self.normalizer
             .apply(&mut features)
@@ -235,11 +237,15 @@ impl Deformer for RefinePredictor {
         BTreeMap::from([
             ("checkpoint".into(), self.checkpoint.display().to_string()),
             ("influences".into(), self.influences.to_string()),
+            ("coarse".into(), self.inputs.coarse.to_string()),
             (
                 "position feature".into(),
-                format!("{:?}", self.position).to_lowercase(),
+                format!("{:?}", self.inputs.position).to_lowercase(),
             ),
-            ("frame".into(), format!("{:?}", self.frame).to_lowercase()),
+            (
+                "frame".into(),
+                format!("{:?}", self.inputs.frame).to_lowercase(),
+            ),
         ])
     }
 
@@ -260,5 +266,58 @@ impl Deformer for RefinePredictor {
                 Ok(x.into_iter().map(|p| p.map(|v| v as f32)).collect())
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use weft_body::Skinning;
+
+    use super::*;
+    use crate::refine::{Frame, PositionFeature};
+
+    #[test]
+    fn a_run_made_before_a_key_existed_reads_its_default_and_unknown_keys_are_refused() {
+        let path = Path::new("run/config.toml");
+        // The [model] table of a DenseGATs run of 2026-11-25: no `frame`, no `coarse`.
+        let old: toml::Table = toml::from_str(
+            "activation = \"tanhshrink\"\nbatch_norm = true\nblocks = 3\nchannels = 4\n\
+             dense = true\nheads = 4\ninfluences = 8\ninput_widths = [32, 32]\njoints = 24\n\
+             modules = 2\noutput_widths = [128, 64]\nposition = \"position\"\n\
+             self_reinforced = 0.125\n",
+        )
+        .unwrap();
+        let cfg: DenseGatsConfig = model_config(&old, path).unwrap();
+        assert_eq!(
+            cfg.inputs(),
+            InputSpec {
+                coarse: Skinning::Lbs,
+                position: PositionFeature::Position,
+                frame: Frame::World,
+            }
+        );
+        assert_eq!((cfg.blocks, cfg.channels, cfg.modules), (3, 4, 2));
+        let mut new = old.clone();
+        new.insert("coarse".into(), "dqs".into());
+        new.insert("frame".into(), "skinning".into());
+        let cfg: MultiResGnetConfig = {
+            let mut t = new.clone();
+            for k in ["blocks", "modules", "dense"] {
+                t.remove(k);
+            }
+            model_config(&t, path).unwrap()
+        };
+        assert_eq!((cfg.coarse, cfg.frame), (Skinning::Dqs, Frame::Skinning));
+        new.insert("coarse".into(), "cubic".into());
+        let e = model_config::<DenseGatsConfig>(&new, path)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("run/config.toml") && e.contains("cubic"), "{e}");
+        new.remove("coarse");
+        new.insert("corse".into(), "dqs".into());
+        let e = model_config::<DenseGatsConfig>(&new, path)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("corse"), "{e}");
     }
 }

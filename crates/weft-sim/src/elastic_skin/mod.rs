@@ -15,9 +15,9 @@
 //!   bone switches across a joint, and two neighbours pulled towards the two bones'
 //!   targets (a bent elbow's are centimetres apart) leave a crease along the switch;
 //!   DQS is smooth, does not collapse, and is rigid where one bone dominates. `k_i` is full where one bone dominates (`w_max >=`
-//!   [`ElasticSkinParams::tie_rigid_weight`]) and falls smoothly to zero where weights
-//!   mix (`w_max <=` [`ElasticSkinParams::tie_free_weight`]), so joint regions find a
-//!   shape that keeps area, curvature and volume instead of following the blend.
+//!   [`ElasticSkinParams::tie_rigid_weight`]) and falls smoothly where weights mix
+//!   (to zero at `w_max <=` [`ElasticSkinParams::tie_free_weight`]), so joint regions
+//!   find a shape that keeps area, curvature and volume instead of following the blend.
 //!
 //! The solve starts from dual quaternion skinning (no collapsed triangles to recover
 //! from); where the tie is weak, membrane, bending and volume decide, so the result
@@ -73,7 +73,12 @@ pub struct ElasticSkinParams {
     /// membrane's, so rigid parts follow their bone to well under a millimetre.
     pub tie_stiffness: f64,
     /// Largest weight at or below which a vertex is untied (free to find its shape).
-    /// Default 0.5: with two bones mixing evenly neither is the right target.
+    /// Default 0.0: every blended vertex keeps part of its tie to DQS (58 % of full
+    /// where two bones mix evenly), and volume and membrane still decide the joints'
+    /// shape (the elbow at 120° keeps 93.8 % of its volume, 93.5 % with 0.5). Untied
+    /// regions (0.5) let the torso, where the spine's three joints blend, buckle into
+    /// folds that switch with small pose changes and that no network fitted
+    /// (docs/characters.md, "Where it stands").
     pub tie_free_weight: f64,
     /// Largest weight at or above which the tie is full; in between it follows a
     /// smoothstep. Default 0.9: SMPL-style weights reach 0.9 a few centimetres from the
@@ -98,7 +103,7 @@ impl Default for ElasticSkinParams {
             bending_stiffness: 1e-2,
             volume_stiffness: 1e6,
             tie_stiffness: 1e6,
-            tie_free_weight: 0.5,
+            tie_free_weight: 0.0,
             tie_rigid_weight: 0.9,
             solve_joint_regions_only: true,
             max_iterations: 40,

@@ -15,8 +15,10 @@ use crate::run_config::{ModelSettings, RunConfig, TaskSettings};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RefineTraining {
-    /// Vertices per training patch (§3.2.3.2: 1 000; §3.3.3.2: 1 024, the preset's
-    /// for MultiResGNet).
+    /// Vertices per training patch (§3.2.3.2: 1 000; §3.3.3.2: 1 024, the `paper`
+    /// preset's for MultiResGNet), or 0: whole meshes (the `cpu` preset's: on a few
+    /// characters, a patch's batch statistics describe one limb, and whole meshes
+    /// fitted the joints better, docs/characters.md).
     pub patch: usize,
     /// Patches per forward pass, as one disjoint graph (§3.2.3.2's batch of 8). Batch
     /// normalisation then takes its statistics over several body regions of several
@@ -40,11 +42,17 @@ impl Default for RefineTraining {
 }
 
 impl RefineTraining {
+    /// Vertices per patch on a mesh of `n` vertices.
+    pub fn patch_size(&self, n: usize) -> usize {
+        if self.patch == 0 {
+            n
+        } else {
+            self.patch
+        }
+    }
+
     /// Checks every range; errors name the field as in config.toml.
     pub fn validate_values(&self) -> Result<()> {
-        if self.patch == 0 {
-            return Err(TrainError::config("train.patch", self.patch, "at least 1"));
-        }
         if self.patches == 0 {
             return Err(TrainError::config(
                 "train.patches",
@@ -61,7 +69,8 @@ impl TaskSettings for RefineTraining {
         match name {
             "paper" => Ok(RefineTraining::default()),
             "cpu" => Ok(RefineTraining {
-                patches: 4,
+                patch: 0,
+                patches: 1,
                 ..RefineTraining::default()
             }),
             other => Err(TrainError::config("preset", other, "one of cpu, paper")),
@@ -71,7 +80,7 @@ impl TaskSettings for RefineTraining {
     fn preset_for(name: &str, model: ModelKind) -> Result<Self> {
         let preset = Self::preset(name)?;
         Ok(match model {
-            ModelKind::MultiResGnet => RefineTraining {
+            ModelKind::MultiResGnet if preset.patch != 0 => RefineTraining {
                 patch: MultiResGnetConfig::PATCH,
                 ..preset
             },
@@ -83,6 +92,10 @@ impl TaskSettings for RefineTraining {
         self.validate_values()
     }
 }
+
+/// Adam's rate of both `cpu` presets: whole meshes, one pose per step, fitted the tiny
+/// set's joints at 3e-3 where 1e-2 on patches had left them at LBS's (docs/characters.md).
+const CPU_LEARNING_RATE: f64 = 3e-3;
 
 /// The loop's settings of the thesis (§3.2.3.2): Adam from `learning_rate`, the rate
 /// times 0.75 when validation has not improved for 8 measurements, floor 5e-7, batch 8
@@ -123,7 +136,14 @@ impl ModelSettings for DenseGatsConfig {
     }
 
     fn trainer(name: &str) -> Result<TrainConfig> {
-        refine_trainer(name, 1e-3)
+        refine_trainer(
+            name,
+            if name == "cpu" {
+                CPU_LEARNING_RATE
+            } else {
+                1e-3
+            },
+        )
     }
 }
 
@@ -141,9 +161,16 @@ impl ModelSettings for MultiResGnetConfig {
         self.validate().map_err(|e| e.to_string())
     }
 
-    /// §3.3.3.2: Adam from 0.01.
+    /// §3.3.3.2: Adam from 0.01 (`paper`).
     fn trainer(name: &str) -> Result<TrainConfig> {
-        refine_trainer(name, 1e-2)
+        refine_trainer(
+            name,
+            if name == "cpu" {
+                CPU_LEARNING_RATE
+            } else {
+                1e-2
+            },
+        )
     }
 }
 
@@ -164,9 +191,16 @@ mod tests {
         assert_eq!(multires.train.task.patch, 1024);
         assert_eq!(multires.train.trainer.learning_rate, 1e-2);
         assert_eq!(multires.model, MultiResGnetConfig::new());
+        // `cpu`: whole meshes, one pose per step, in the skinning frame.
         let cpu = MultiResGnetRun::preset("cpu").unwrap();
-        assert_eq!(cpu.train.task.patch, 1024);
-        assert!(cpu.to_toml().unwrap().contains("patch = 1024"));
+        assert_eq!((cpu.train.task.patch, cpu.train.task.patches), (0, 1));
+        assert_eq!(cpu.train.task.patch_size(14_606), 14_606);
+        assert_eq!(multires.train.task.patch_size(14_606), 1024);
+        assert!(cpu.to_toml().unwrap().contains("patch = 0"));
+        assert_eq!(cpu.model.frame, weft_models::refine::Frame::Skinning);
+        let cpu = DenseGatsRun::preset("cpu").unwrap();
+        assert_eq!(cpu.train.trainer.learning_rate, CPU_LEARNING_RATE);
+        assert_eq!(cpu.train.task.patch, 0);
         assert!(MultiResGnetRun::preset("huge").is_err());
     }
 }

@@ -25,7 +25,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 use weft_data::characters::{CharacterData, CharacterSet};
 use weft_data::Split;
 use weft_mesh::rng::SplitMix64;
-use weft_models::refine::{Character, CharacterRig, Frame, PositionFeature, RefineNet};
+use weft_models::refine::{Character, CharacterRig, InputSpec, RefineNet};
 use weft_nn::{FeatureNormalizer, GraphBatch, NormalizerFit, Patch};
 
 pub use config::RefineTraining;
@@ -95,17 +95,16 @@ impl Posed {
     }
 
     /// Normalised features `[N, 6 + S]`, the coarse mesh and the target corrections (cm,
-    /// `[N, 3]`, in `frame`) of pose `p`.
+    /// `[N, 3]`, in the spec's frame) of pose `p`, read as `spec` says.
     pub fn inputs(
         &self,
         p: usize,
-        position: PositionFeature,
-        frame: Frame,
+        spec: InputSpec,
         normalizer: &FeatureNormalizer,
     ) -> Result<PoseTensors> {
-        let mut input =
-            self.character
-                .pose_input(&self.data.poses[p], [0.0; 3], position, frame)?;
+        let mut input = self
+            .character
+            .pose_input(&self.data.poses[p], [0.0; 3], spec)?;
         let targets = input.target_cm(&self.data.truth[p]);
         let mut features = std::mem::take(&mut input.features);
         normalizer.apply(&mut features).map_err(nn)?;
@@ -129,11 +128,7 @@ pub fn load_split(set: &CharacterSet, split: Split, influences: usize) -> Result
 }
 
 /// The normaliser fitted on every pose of `characters`.
-pub fn fit_normalizer(
-    characters: &[Posed],
-    position: PositionFeature,
-    frame: Frame,
-) -> Result<FeatureNormalizer> {
+pub fn fit_normalizer(characters: &[Posed], spec: InputSpec) -> Result<FeatureNormalizer> {
     let width = characters
         .first()
         .map(|c| c.character.feature_width())
@@ -141,7 +136,7 @@ pub fn fit_normalizer(
     let mut fit = NormalizerFit::new(width).map_err(nn)?;
     for c in characters {
         for pose in &c.data.poses {
-            let input = c.character.pose_input(pose, [0.0; 3], position, frame)?;
+            let input = c.character.pose_input(pose, [0.0; 3], spec)?;
             fit.observe(&input.features).map_err(nn)?;
         }
     }
@@ -151,8 +146,7 @@ pub fn fit_normalizer(
 /// The refinement task of a model `M`; see the module documentation.
 pub struct RefineTask<M> {
     training: RefineTraining,
-    position: PositionFeature,
-    frame: Frame,
+    spec: InputSpec,
     normalizer: FeatureNormalizer,
     device: Device,
     seed: u64,
@@ -166,10 +160,10 @@ pub struct RefineTask<M> {
 
 impl<M> RefineTask<M> {
     /// The task over `train` and `validation` characters, with the normaliser fitted on
-    /// `train`; the model reads `position` in `frame`.
+    /// `train`; the model reads poses as `spec` says.
     pub fn new(
         training: &RefineTraining,
-        (position, frame): (PositionFeature, Frame),
+        spec: InputSpec,
         train: Vec<Posed>,
         validation: Vec<Posed>,
         normalizer: FeatureNormalizer,
@@ -179,7 +173,8 @@ impl<M> RefineTask<M> {
         training.validate_values()?;
         let mut items = Vec::new();
         for (c, posed) in train.iter().enumerate() {
-            let patches = posed.character.vertex_count().div_ceil(training.patch);
+            let n = posed.character.vertex_count();
+            let patches = n.div_ceil(training.patch_size(n));
             for p in 0..posed.data.poses.len() {
                 items.extend((0..patches).map(|k| (c, p, k)));
             }
@@ -192,8 +187,7 @@ impl<M> RefineTask<M> {
         let groups = items.chunks(training.patches).map(<[_]>::to_vec).collect();
         Ok(RefineTask {
             training: training.clone(),
-            position,
-            frame,
+            spec,
             normalizer,
             device: device.clone(),
             seed,
@@ -258,10 +252,13 @@ where
                     ^ (((c as u64) << 40) | ((p as u64) << 20) | k as u64)
                         .wrapping_mul(0x9e37_79b9_7f4a_7c15),
             );
-            let patch = Patch::grow(posed.character.graph(), rng.below(n), self.training.patch)
-                .map_err(nn)?;
-            let (features, _, targets) =
-                posed.inputs(p, self.position, self.frame, &self.normalizer)?;
+            let patch = Patch::grow(
+                posed.character.graph(),
+                rng.below(n),
+                self.training.patch_size(n),
+            )
+            .map_err(nn)?;
+            let (features, _, targets) = posed.inputs(p, self.spec, &self.normalizer)?;
             let width = posed.character.feature_width();
             xs.push(self.tensor(patch.gather(&features, width).map_err(nn)?, width));
             ys.push(self.tensor(patch.gather(&targets, 3).map_err(nn)?, 3));
@@ -278,8 +275,7 @@ where
         for posed in &self.validation {
             let width = posed.character.feature_width();
             for p in 0..posed.data.poses.len() {
-                let (features, _, targets) =
-                    posed.inputs(p, self.position, self.frame, &self.normalizer)?;
+                let (features, _, targets) = posed.inputs(p, self.spec, &self.normalizer)?;
                 let pred = model.forward(self.tensor(features, width), posed.character.batch())?;
                 let pred: Vec<f32> = pred
                     .into_data()
