@@ -5,6 +5,7 @@
 //! - [`baseline`]: the no-learning LBS and DQS baselines;
 //! - [`refine`]: seed 001's learned refinement of skinning (case 1: dressed characters),
 //!   shared by [`densegats`] (DenseGATs, §3.2) and [`multiresgnet`] (MultiResGNet, §3.3);
+//! - [`garfitnet`]: seed 001's fit-aware garment refinement (case 2, ch. 4);
 //! - [`multilevel`]: the Multilevel model of seed 000 (multi-source garment graph,
 //!   structure-preserving pooling, temporal skinning weights and blend shapes, LBS);
 //! - [`kind`]: [`ModelKind`], the systems by name;
@@ -14,6 +15,7 @@ pub mod baseline;
 pub mod deformer;
 pub mod densegats;
 pub mod error;
+pub mod garfitnet;
 pub mod kind;
 pub mod load;
 pub mod multilevel;
