@@ -199,12 +199,16 @@ pub fn train_refine<M: ModelSettings + RefineConfig>(
         &device,
     )?;
     let model = cfg.model.build(&device)?;
+    let per_step = match (cfg.train.task.patches, cfg.train.task.patch) {
+        (1, 0) => "one whole mesh".to_string(),
+        (k, 0) => format!("{k} whole meshes"),
+        (k, n) => format!("{k} patches of {n} vertices"),
+    };
     log(&format!(
-        "training {} ({} preset) on {characters} characters ({} patches of {} vertices per epoch), {} steps -> {}",
+        "training {} ({} preset) on {characters} characters ({} steps per epoch of {per_step}), {} steps -> {}",
         M::KIND,
         cfg.preset,
         task.item_count(),
-        cfg.train.task.patch,
         cfg.train.trainer.steps,
         spec.out.display()
     ));
