@@ -13,11 +13,47 @@
 //! Signs: a factor's sign is free in the likelihood; each is turned so that its loadings
 //! sum to a positive value, so a larger `α_k` means larger garment–body distances (the
 //! thesis's Fig. 4.3: the first factor orders tight → loose).
+//!
+//! The samples ([`garment_body_distances`]): eq. 4.3 indexes distances by garment
+//! vertex, which gives every garment template its own length of `d`, so one factor
+//! model could not cover garments of different meshes, nor give α to an unseen one
+//! (thesis-reference G1). Here they are indexed by **body** vertex, whose topology every
+//! body shares: each body vertex's distance to the garment surface in the rest pose,
+//! capped, so a body vertex the garment does not cover reads the cap. A looser garment
+//! raises the covered distances, a shorter one turns more of them into the cap; both
+//! are fit, and the factors sort them out.
 
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
+use weft_body::query::BodySurface;
+use weft_mesh::TriMesh;
 
 use crate::error::ModelError;
+
+/// One garment–body pair's sample: the distance from each of `body`'s vertices (rest
+/// pose, the body the garment was made for) to `garment`'s surface, at most `cap`
+/// metres (see the module documentation).
+pub fn garment_body_distances(
+    body: &[[f64; 3]],
+    garment: &TriMesh,
+    cap: f64,
+) -> Result<Vec<f64>, ModelError> {
+    if !(cap.is_finite() && cap > 0.0) {
+        return Err(ModelError::Config(format!(
+            "distance cap {cap}: expected a positive number of metres"
+        )));
+    }
+    let surface =
+        BodySurface::from_mesh(garment).map_err(|e| ModelError::Garment(e.to_string()))?;
+    body.iter()
+        .map(|&p| {
+            surface
+                .closest_point_within(p, cap)
+                .map(|c| c.map_or(cap, |c| c.distance))
+                .map_err(|e| ModelError::Body(e.to_string()))
+        })
+        .collect()
+}
 
 /// Settings of [`FactorAnalysis::fit`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -276,6 +312,40 @@ mod tests {
         let loose_pair: Vec<f64> = vec![0.03; 40];
         let a = fa.alpha(&[tight, loose_pair]).unwrap();
         assert!(a[1][0] > a[0][0] + 1.0, "{a:?}");
+    }
+
+    #[test]
+    fn body_indexed_distances_give_any_garment_an_alpha_that_orders_looseness() {
+        // A leg (radius 10 cm, 38 cm long) and tubes of four lengths and six radii, each
+        // meshed with its own ring count.
+        let leg = weft_mesh::primitives::cylinder(20, 32, 0.1, 0.02);
+        let radii = [0.105, 0.11, 0.115, 0.12, 0.125, 0.13];
+        let mut samples = Vec::new();
+        for rings in [8, 10, 12, 14] {
+            for r in radii {
+                let tube = weft_mesh::primitives::cylinder(rings, 32, r, 0.02);
+                samples.push(garment_body_distances(&leg.positions, &tube, 0.1).unwrap());
+            }
+        }
+        // Covered body vertices read the gap (less the chords), those below the hem more, up
+        // to the cap.
+        let s = &samples[1];
+        assert!((s[0] - 0.01).abs() < 1e-4, "{}", s[0]);
+        assert!(s[19 * 32] == 0.1 && s[8 * 32] > 0.01);
+        let cfg = FactorAnalysisConfig {
+            factors: 2,
+            ..FactorAnalysisConfig::default()
+        };
+        let fa = FactorAnalysis::fit(&samples, &cfg).unwrap();
+        let alpha = fa.alpha(&samples).unwrap();
+        // One factor grows with the radius at every length.
+        assert!(
+            (0..2).any(|k| alpha
+                .chunks(radii.len())
+                .all(|g| g.windows(2).all(|w| w[1][k] > w[0][k]))),
+            "{alpha:?}"
+        );
+        assert!(garment_body_distances(&leg.positions, &leg, 0.0).is_err());
     }
 
     #[test]

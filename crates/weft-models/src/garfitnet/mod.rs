@@ -4,4 +4,4 @@
 
 pub mod fit;
 
-pub use fit::{FactorAnalysis, FactorAnalysisConfig};
+pub use fit::{garment_body_distances, FactorAnalysis, FactorAnalysisConfig};
