@@ -10,6 +10,8 @@
 //! - [`backend`]: the devices (flex CPU by default; wgpu / cuda behind features).
 //! - [`activation`]: the nonlinearities the papers name.
 //! - [`mlp`], [`lstm`]: MLP (with optional batch norm) and stacked LSTM encoders.
+//! - [`multires`]: seed 001's multi-resolution module ([`MultiResGModule`]: a dense GAT
+//!   branch beside a pooled one), MultiResGNet's core and GarFitNet's branches.
 //! - [`pool`]: structure-preserving pooling/unpooling (seed 000) and the learned baselines
 //!   TopKPool, SAGPool, ASAP with unpooling by index, and MultiResGNet's edge-contraction
 //!   pooling ([`EdgePool`]).
@@ -32,6 +34,7 @@ pub mod infer;
 pub mod init;
 pub mod lstm;
 pub mod mlp;
+pub mod multires;
 pub mod normalizer;
 pub mod optim;
 pub mod patch;
@@ -49,6 +52,7 @@ pub use error::{NnError, Result};
 pub use gat::{AttentionImpl, GatBlock, GatBlockConfig, HeadMerge};
 pub use lstm::{LstmEncoder, LstmEncoderConfig};
 pub use mlp::{Mlp, MlpConfig};
+pub use multires::{GlobalBranch, MultiResGModule, MultiResGModuleConfig};
 pub use normalizer::{FeatureNormalizer, NormalizerFit};
 pub use optim::{cosine_annealing, Adamax, AdamaxConfig};
 pub use patch::Patch;

@@ -3,7 +3,8 @@
 //! `M = M_coarse + W(G; Ψ)` (eq. 3.1), from translation-invariant node features (the
 //! relative skinning descriptor of eq. 3.9 in place of positions).
 //!
-//! Input transform (64, 32; tanh), then two branches on its output `v^[l]`:
+//! Input transform (64, 32; tanh), then weft-nn's [`MultiResGModule`] on its output `v^[l]`,
+//! two branches:
 //!
 //! - **local**: one dense module of `m` GAT blocks (16 channels × 8 heads plus a
 //!   self-reinforced stream of β = 1.0, tanhshrink; eq. 3.6), width `32 + m·256`; `m` is
@@ -24,10 +25,7 @@ use burn::module::Module;
 use burn::nn::{Linear, LinearConfig};
 use burn::tensor::{Device, Tensor};
 use weft_body::Skinning;
-use weft_nn::{
-    edge_unpool, Activation, DenseGatModule, DenseGatModuleConfig, EdgePool, EdgePoolConfig,
-    GraphBatch, Mlp, NormedGat,
-};
+use weft_nn::{Activation, GraphBatch, Mlp, MultiResGModule, MultiResGModuleConfig};
 
 use crate::error::ModelError;
 use crate::refine::{nn_error as nn, tanh_mlp, Frame, InputSpec, PositionFeature, RefineNet};
@@ -154,48 +152,29 @@ impl MultiResGnetConfig {
         Ok(())
     }
 
-    /// `blocks` GAT blocks of this network's widths reading `d_input` features, densely
-    /// connected or in sequence.
-    fn module(&self, d_input: usize, blocks: usize, dense: bool) -> DenseGatModuleConfig {
-        DenseGatModuleConfig::new(d_input, blocks, self.channels)
+    /// The multi-resolution module of this network's widths reading `d_input` features.
+    fn multires(&self, d_input: usize) -> MultiResGModuleConfig {
+        MultiResGModuleConfig::new(d_input)
+            .with_local_blocks(self.local_blocks)
+            .with_channels(self.channels)
             .with_heads(self.heads)
             .with_self_reinforced(self.self_reinforced)
-            .with_activation(self.activation)
             .with_batch_norm(self.batch_norm)
-            .with_dense(dense)
+            .with_activation(self.activation)
+            .with_global(self.global)
+            .with_global_blocks(self.global_blocks)
+            .with_score_offset(self.score_offset)
     }
 
     /// Builds the network.
     pub fn init(&self, device: &Device) -> Result<MultiResGnet, ModelError> {
         self.validate()?;
         let input = tanh_mlp(6 + self.joints, &self.input_widths, self.batch_norm, device)?;
-        let d = input.output_width();
-        let local = self
-            .module(d, self.local_blocks, true)
+        let multires = self
+            .multires(input.output_width())
             .init(device)
             .map_err(nn)?;
-        let mut fused = local.output_width();
-        let global = if self.global {
-            let pool = EdgePoolConfig::new(d)
-                .with_channels(self.channels)
-                .with_score_offset(self.score_offset)
-                .init(device)
-                .map_err(nn)?;
-            let blocks = self.module(d, self.global_blocks, false);
-            let coarse = blocks.init(device).map_err(nn)?;
-            let after = blocks
-                .block(blocks.output_width())
-                .init(device)
-                .map_err(nn)?;
-            fused += after.output_width();
-            Some(GlobalBranch {
-                pool,
-                coarse,
-                after,
-            })
-        } else {
-            None
-        };
+        let fused = multires.output_width();
         let hidden = if self.output_widths.is_empty() {
             None
         } else {
@@ -209,33 +188,10 @@ impl MultiResGnetConfig {
         let d_head = hidden.as_ref().map_or(fused, Mlp::output_width);
         Ok(MultiResGnet {
             input,
-            local,
-            global,
+            multires,
             hidden,
             head: LinearConfig::new(d_head, 3).init(device),
         })
-    }
-}
-
-/// The global branch: pool, GAT blocks on the pooled graph, unpool, `f_GATB`.
-#[derive(Module, Debug)]
-pub struct GlobalBranch {
-    /// Edge-contraction pooling of the input transform's output (eq. 3.10–3.11).
-    pub pool: EdgePool,
-    /// GAT blocks in sequence on the pooled graph.
-    pub coarse: DenseGatModule,
-    /// The GAT block after unpooling (eq. 3.13's `f_GATB`).
-    pub after: NormedGat,
-}
-
-impl GlobalBranch {
-    /// `x`: `[N, d]` on `graph`; returns `[N, after.output_width()]`.
-    fn forward(&self, x: Tensor<2>, graph: &GraphBatch) -> Result<Tensor<2>, ModelError> {
-        let pooled = self.pool.forward(x, graph).map_err(nn)?;
-        let coarse = pooled.clusters.coarse.adjacency();
-        let g = self.coarse.forward(pooled.features, coarse).map_err(nn)?;
-        let g = edge_unpool(g, &pooled.clusters).map_err(nn)?;
-        self.after.forward(g, graph.adjacency()).map_err(nn)
     }
 }
 
@@ -244,10 +200,8 @@ impl GlobalBranch {
 pub struct MultiResGnet {
     /// Input transform.
     pub input: Mlp,
-    /// The local branch's dense module.
-    pub local: DenseGatModule,
-    /// The global branch, or none (single resolution).
-    pub global: Option<GlobalBranch>,
+    /// The local and global branches.
+    pub multires: MultiResGModule,
     /// Output transform's hidden layers.
     pub hidden: Option<Mlp>,
     /// The last linear layer to the 3-vector (no normalisation, no σ).
@@ -257,14 +211,7 @@ pub struct MultiResGnet {
 impl RefineNet for MultiResGnet {
     fn forward(&self, x: Tensor<2>, graph: &GraphBatch) -> Result<Tensor<2>, ModelError> {
         let v = self.input.forward(x).map_err(nn)?;
-        let local = self
-            .local
-            .forward(v.clone(), graph.adjacency())
-            .map_err(nn)?;
-        let mut h = match &self.global {
-            Some(global) => Tensor::cat(vec![local, global.forward(v, graph)?], 1),
-            None => local,
-        };
+        let mut h = self.multires.forward(v, graph).map_err(nn)?;
         if let Some(hidden) = &self.hidden {
             h = hidden.forward(h).map_err(nn)?;
         }

@@ -36,9 +36,9 @@ fn paper_widths_follow_the_thesis_and_the_network_runs() {
         .init(&device)
         .unwrap();
     // M1: one dense module of six 256-wide blocks on the 32-wide input transform.
-    assert_eq!(net.local.output_width(), 32 + 6 * 256);
-    assert_eq!(net.local.output_width(), 1568);
-    let global = net.global.as_ref().unwrap();
+    assert_eq!(net.multires.local.output_width(), 32 + 6 * 256);
+    assert_eq!(net.multires.local.output_width(), 1568);
+    let global = net.multires.global.as_ref().unwrap();
     assert_eq!(global.pool.input_width(), 32);
     assert_eq!(global.coarse.blocks.len(), 2);
     assert_eq!(global.coarse.output_width(), 256);
@@ -77,7 +77,7 @@ fn single_resolution_ablation_and_the_cpu_preset_run() {
         .with_global_blocks(0)
         .init(&device)
         .unwrap();
-    assert!(single.global.is_none());
+    assert!(single.multires.global.is_none());
     assert_eq!(single.hidden.as_ref().unwrap().input_width(), 1568);
     let x = Tensor::<2>::random([n, 30], Distribution::Default, &device);
     assert_eq!(single.forward(x, &graph).unwrap().dims(), [n, 3]);
@@ -89,7 +89,7 @@ fn single_resolution_ablation_and_the_cpu_preset_run() {
         .with_score_offset(0.5);
     assert_eq!(config.position, PositionFeature::Descriptor);
     let net = config.init(&device).unwrap();
-    assert_eq!(net.local.output_width(), 32 + 3 * 64);
+    assert_eq!(net.multires.local.output_width(), 32 + 3 * 64);
     let x = Tensor::<2>::random([n, 30], Distribution::Default, &device);
     let y = host(&net.forward(x, &graph).unwrap());
     assert_eq!(y.len(), n * 3);
@@ -148,7 +148,8 @@ fn gradients_match_central_differences_in_f64() {
         Distribution::Uniform(-1.0, 1.0),
         &device,
     ));
-    let pool_weight = |net: &MultiResGnet| net.global.as_ref().unwrap().pool.weight.clone();
+    let pool_weight =
+        |net: &MultiResGnet| net.multires.global.as_ref().unwrap().pool.weight.clone();
     let w0 = host(&pool_weight(&net).val());
     let w_shape = pool_weight(&net).dims();
 
@@ -156,10 +157,10 @@ fn gradients_match_central_differences_in_f64() {
     let loss = |x: &[f64], w: &[f64]| {
         let mut m = net.clone();
         let weight = Param::from_tensor(f64_tensor(w.to_vec(), w_shape, &device));
-        m.global.as_mut().unwrap().pool.weight = weight;
+        m.multires.global.as_mut().unwrap().pool.weight = weight;
         let x = f64_tensor(x.to_vec(), [n, d], &device).require_grad();
         let v = m.input.forward(x.clone()).unwrap();
-        let pool = &m.global.as_ref().unwrap().pool;
+        let pool = &m.multires.global.as_ref().unwrap().pool;
         let members = pool.forward(v, &graph).unwrap().clusters.members;
         let out = m.forward(x.clone(), &graph).unwrap();
         let l = (out * f64_tensor(r.clone(), [n, 3], &device)).sum();
