@@ -30,6 +30,10 @@ use weft_nn::{Activation, GraphBatch, Mlp, MultiResGModule, MultiResGModuleConfi
 use crate::error::ModelError;
 use crate::refine::{nn_error as nn, tanh_mlp, Frame, InputSpec, PositionFeature, RefineNet};
 
+mod inference;
+
+pub use inference::MultiResGnetInference;
+
 /// Configuration of [`MultiResGnet`].
 #[derive(Config, Debug, PartialEq)]
 pub struct MultiResGnetConfig {
@@ -248,6 +252,10 @@ impl crate::refine::RefineConfig for MultiResGnetConfig {
 
     fn joints(&self) -> usize {
         self.joints
+    }
+
+    fn inference(&self, net: MultiResGnet) -> Box<dyn RefineNet + Send + Sync> {
+        Box::new(net.inference())
     }
 }
 

@@ -22,6 +22,7 @@
 mod gat;
 mod linear;
 mod math;
+mod multires;
 
 use std::ops::Range;
 
@@ -29,6 +30,7 @@ use burn::tensor::{Device, Tensor, TensorData};
 
 pub use gat::{InferDenseModule, InferGat};
 pub use linear::{Epilogue, InferLinear, InferMlp};
+pub use multires::{InferGlobal, InferMultiRes};
 
 use crate::error::{check_shape, NnError, ANY};
 

@@ -157,3 +157,26 @@ fn dense_module_equals_the_layer_and_checks_inputs() {
     ));
     assert!(Features::new(vec![0.0; 7], 2).is_err());
 }
+
+#[test]
+fn multires_module_equals_the_layer() {
+    let mut rng = Rng::new(4);
+    let n = 140;
+    let batch = GraphBatch::single(&random_graph(&mut rng, n, 160));
+    let (f, x) = input(&mut rng, n, 6);
+    for global in [true, false] {
+        let module = crate::MultiResGModuleConfig::new(6)
+            .with_local_blocks(2)
+            .with_channels(4)
+            .with_heads(2)
+            .with_global(global)
+            .init(&device())
+            .unwrap()
+            .map(&mut Statistics);
+        let fast = InferMultiRes::from(&module);
+        assert_eq!(fast.output_width(), module.output_width());
+        let want = module.forward(x.clone(), &batch).unwrap();
+        let got = fast.forward(&f, &batch).unwrap();
+        assert_close(&got, want, &format!("global {global}"));
+    }
+}
