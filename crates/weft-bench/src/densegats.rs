@@ -117,6 +117,40 @@ fn flops_per_node(cfg: &DenseGatsConfig, net: &DenseGats) -> f64 {
     2.0 * (f + (d * 3) as f64)
 }
 
+/// The benchmark skirt of about `vertices` vertices bound to `body` as `weft animate
+/// --character` binds any mesh, prepared with `influences` weights per vertex.
+pub(crate) fn bench_character(
+    body: &BodyModel,
+    vertices: usize,
+    influences: usize,
+) -> Result<Character, BenchError> {
+    let mesh = skirt(body, vertices)?;
+    let n = mesh.positions.len();
+    let weights = weft_garment::FitBody::new(body, &[])
+        .and_then(|fit| fit.weights_at(body, &mesh.positions))
+        .map_err(BenchError::stage("binding the character"))?;
+    let joints = body.joints(&[]).map_err(BenchError::stage("rest joints"))?;
+    Character::new(
+        CharacterRig {
+            mesh,
+            weights: weights.to_f32(),
+            joints,
+            parents: body.skeleton().parents().to_vec(),
+            // The network's cost does not depend on the distances' values.
+            joint_distances: vec![0.5; n * body.joint_count()],
+        },
+        influences,
+    )
+    .map_err(BenchError::stage("the character"))
+}
+
+/// The timed pose: the left elbow bent.
+pub(crate) fn bench_pose() -> weft_body::Pose {
+    let mut pose = [[0.0f32; 3]; 24];
+    pose[18] = [0.0, -1.2, 0.0];
+    pose
+}
+
 impl DenseGatsBench {
     /// Runs the bench on a character bound to `body`.
     pub fn run(
@@ -129,31 +163,13 @@ impl DenseGatsBench {
             message: e.to_string(),
         })?;
         progress("character");
-        let mesh = skirt(body, self.vertices)?;
-        let s = body.joint_count();
-        let n = mesh.positions.len();
-        let weights = weft_garment::FitBody::new(body, &[])
-            .and_then(|fit| fit.weights_at(body, &mesh.positions))
-            .map_err(BenchError::stage("binding the character"))?;
-        let joints = body.joints(&[]).map_err(BenchError::stage("rest joints"))?;
-        let character = Character::new(
-            CharacterRig {
-                mesh,
-                weights: weights.to_f32(),
-                joints,
-                parents: body.skeleton().parents().to_vec(),
-                // The network's cost does not depend on the distances' values.
-                joint_distances: vec![0.5; n * s],
-            },
-            cfg.influences,
-        )
-        .map_err(BenchError::stage("the character"))?;
+        let character = bench_character(body, self.vertices, cfg.influences)?;
+        let (n, s) = (character.vertex_count(), body.joint_count());
         let device = cpu();
         let net = cfg
             .init(&device)
             .map_err(BenchError::stage("the network"))?;
-        let mut pose = [[0.0f32; 3]; 24];
-        pose[18] = [0.0, -1.2, 0.0];
+        let pose = bench_pose();
         progress("inputs");
         let reps = self.reps;
         let inputs_ms = try_median_ms(reps, || {

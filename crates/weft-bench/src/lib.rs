@@ -17,6 +17,7 @@ pub mod densegats;
 pub mod error;
 pub mod gat;
 pub mod multilevel;
+pub mod multiresgnet;
 pub mod simulate;
 pub mod timing;
 

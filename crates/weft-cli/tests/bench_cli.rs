@@ -88,6 +88,44 @@ fn gat_compares_the_fused_kernel_with_the_reference() {
 }
 
 #[test]
+fn refinement_models_report_their_stages() {
+    for (model, stages) in [
+        ("densegats", &["modules_ms"][..]),
+        ("multiresgnet", &["local_ms", "global_ms"][..]),
+    ] {
+        let rows = json_lines(&[
+            "bench",
+            model,
+            "--preset",
+            "cpu",
+            "--vertices",
+            "300",
+            "--reps",
+            "1",
+            "--json",
+        ]);
+        assert_eq!(rows.len(), 1);
+        let row = &rows[0];
+        assert_eq!(row["bench"], model);
+        for key in [
+            "inputs_ms",
+            "input_mlp_ms",
+            "output_mlp_ms",
+            "network_ms",
+            "frame_ms",
+        ] {
+            assert!(number(row, key) > 0.0, "{model}: {key} in {row}");
+        }
+        for key in stages {
+            assert!(!row[key].is_null(), "{model}: {key} in {row}");
+        }
+        let out = weft(&["bench", model, "--preset", "huge"]);
+        assert!(!out.status.success());
+        assert!(stderr(&out).contains("--preset"), "{}", stderr(&out));
+    }
+}
+
+#[test]
 fn simulate_reports_cost_and_quality_and_a_table_by_default() {
     let rows = json_lines(&bench_simulate(&[
         "--frames", "3", "--warmup", "2", "--json",

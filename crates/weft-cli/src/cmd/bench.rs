@@ -10,6 +10,7 @@ use serde::Serialize;
 use weft_bench::densegats::DenseGatsBench;
 use weft_bench::gat::GatBench;
 use weft_bench::multilevel::MultilevelBench;
+use weft_bench::multiresgnet::MultiResGnetBench;
 use weft_bench::simulate::bench_simulate;
 use weft_bench::Row;
 use weft_mesh::io::load_mesh;
@@ -29,7 +30,10 @@ pub enum BenchCommand {
     Gat(GatArgs),
     /// DenseGATs (seed 001 §3.2) on a character, one frame per stage (pose inputs, input
     /// transform, each dense module, output transform) in ms, with the linear maps' floor.
-    Densegats(DenseGatsArgs),
+    Densegats(RefineArgs),
+    /// MultiResGNet (seed 001 §3.3) on the same character, one frame per stage (pose
+    /// inputs, input transform, local branch, global branch, output transform) in ms.
+    Multiresgnet(RefineArgs),
     /// The cloth simulator: seconds, Newton and PCG iterations per frame, edge strain
     /// and depth in the body.
     Simulate(SimulateArgs),
@@ -89,7 +93,7 @@ pub struct GatArgs {
 }
 
 #[derive(Args)]
-pub struct DenseGatsArgs {
+pub struct RefineArgs {
     /// Model preset: cpu or paper.
     #[arg(long, default_value = "paper")]
     preset: String,
@@ -132,6 +136,7 @@ pub fn run(command: BenchCommand) -> Result<()> {
         BenchCommand::Multilevel(a) => multilevel(&a),
         BenchCommand::Gat(a) => gat(&a),
         BenchCommand::Densegats(a) => densegats(&a),
+        BenchCommand::Multiresgnet(a) => multiresgnet(&a),
         BenchCommand::Simulate(a) => simulate(&a),
     }
 }
@@ -177,7 +182,7 @@ fn gat(args: &GatArgs) -> Result<()> {
     Ok(())
 }
 
-fn densegats(args: &DenseGatsArgs) -> Result<()> {
+fn densegats(args: &RefineArgs) -> Result<()> {
     let (body, _) = args.common.body.load()?;
     let mut out = Output::new(args.common.json);
     for &vertices in &args.vertices {
@@ -187,6 +192,24 @@ fn densegats(args: &DenseGatsArgs) -> Result<()> {
             reps: args.reps as usize,
         };
         let label = format!("densegats {} N≈{vertices}", args.preset);
+        let spinner = spinner(&label);
+        let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
+        spinner.finish_and_clear();
+        out.row(&figures.with_context(|| label.clone())?)?;
+    }
+    Ok(())
+}
+
+fn multiresgnet(args: &RefineArgs) -> Result<()> {
+    let (body, _) = args.common.body.load()?;
+    let mut out = Output::new(args.common.json);
+    for &vertices in &args.vertices {
+        let bench = MultiResGnetBench {
+            preset: args.preset.clone(),
+            vertices,
+            reps: args.reps as usize,
+        };
+        let label = format!("multiresgnet {} N≈{vertices}", args.preset);
         let spinner = spinner(&label);
         let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
         spinner.finish_and_clear();
