@@ -55,7 +55,8 @@ pub struct DenseGatsConfig {
     /// Widths of the input transform.
     #[config(default = "vec![32, 32]")]
     pub input_widths: Vec<usize>,
-    /// Dense modules.
+    /// Dense modules; 0 leaves the input and output transforms alone, a per-vertex MLP
+    /// on the same features (Table 3.4's MLP row).
     #[config(default = 3)]
     pub modules: usize,
     /// GAT blocks per module.
@@ -111,7 +112,6 @@ impl DenseGatsConfig {
         for (field, v) in [
             ("joints", self.joints),
             ("influences", self.influences),
-            ("modules", self.modules),
             ("blocks", self.blocks),
             ("channels", self.channels),
             ("heads", self.heads),
@@ -156,7 +156,7 @@ impl DenseGatsConfig {
         let input = tanh_mlp(6 + self.joints, &self.input_widths, self.batch_norm, device)?;
         let mut d = input.output_width();
         let mut modules = Vec::with_capacity(self.modules);
-        let mut transitions = Vec::with_capacity(self.modules - 1);
+        let mut transitions = Vec::with_capacity(self.modules.saturating_sub(1));
         for k in 0..self.modules {
             if k > 0 {
                 let t = self.module(d).block(d).init(device).map_err(nn)?;
@@ -303,5 +303,23 @@ mod tests {
             .unwrap()
             .init(&device)
             .unwrap();
+        // No modules: the per-vertex MLP of Table 3.4, blind to the graph.
+        let mlp = DenseGatsConfig::new()
+            .with_modules(0)
+            .init(&device)
+            .unwrap();
+        assert!(mlp.modules.is_empty() && mlp.transitions.is_empty());
+        let mesh = weft_mesh::primitives::grid(5, 4, 1.0);
+        let graph = GraphBatch::single(&mesh.graph());
+        let x = Tensor::<2>::random([20, 30], burn::tensor::Distribution::Default, &device);
+        let y = mlp.forward(x.clone(), &graph).unwrap();
+        assert_eq!(y.dims(), [20, 3]);
+        let rows = |t: Tensor<2>| t.slice([0..10, 0..3]).into_data();
+        let other = GraphBatch::single(&weft_mesh::primitives::grid(10, 2, 1.0).graph());
+        assert_eq!(
+            rows(mlp.forward(x.clone(), &other).unwrap()),
+            rows(y),
+            "the graph changes nothing"
+        );
     }
 }
