@@ -11,16 +11,15 @@
 //! The thesis reports about 31 ms per frame on a GPU for a 10 220-vertex character
 //! (§3.2.3.2); the target here is 50 ms on two CPU cores at paper widths.
 
-use burn::tensor::{Tensor, TensorData};
 use serde::Serialize;
 use weft_body::BodyModel;
 use weft_models::densegats::{DenseGats, DenseGatsConfig, DenseGatsInference};
-use weft_models::refine::{Character, CharacterRig, RefineConfig, RefineNet};
+use weft_models::refine::RefineConfig;
 use weft_nn::backend::cpu;
-use weft_nn::infer::Features;
 
+use crate::refine::Setup;
 use crate::timing::try_median_ms;
-use crate::{skirt, BenchError, Row};
+use crate::{BenchError, Row};
 
 /// The GEMM rate the floor assumes, GFLOP/s: what burn's flex GEMM reached on this
 /// machine's two AVX-512 cores (docs/benchmarks.md, `weft bench multilevel`).
@@ -117,40 +116,6 @@ fn flops_per_node(cfg: &DenseGatsConfig, net: &DenseGats) -> f64 {
     2.0 * (f + (d * 3) as f64)
 }
 
-/// The benchmark skirt of about `vertices` vertices bound to `body` as `weft animate
-/// --character` binds any mesh, prepared with `influences` weights per vertex.
-pub(crate) fn bench_character(
-    body: &BodyModel,
-    vertices: usize,
-    influences: usize,
-) -> Result<Character, BenchError> {
-    let mesh = skirt(body, vertices)?;
-    let n = mesh.positions.len();
-    let weights = weft_garment::FitBody::new(body, &[])
-        .and_then(|fit| fit.weights_at(body, &mesh.positions))
-        .map_err(BenchError::stage("binding the character"))?;
-    let joints = body.joints(&[]).map_err(BenchError::stage("rest joints"))?;
-    Character::new(
-        CharacterRig {
-            mesh,
-            weights: weights.to_f32(),
-            joints,
-            parents: body.skeleton().parents().to_vec(),
-            // The network's cost does not depend on the distances' values.
-            joint_distances: vec![0.5; n * body.joint_count()],
-        },
-        influences,
-    )
-    .map_err(BenchError::stage("the character"))
-}
-
-/// The timed pose: the left elbow bent.
-pub(crate) fn bench_pose() -> weft_body::Pose {
-    let mut pose = [[0.0f32; 3]; 24];
-    pose[18] = [0.0, -1.2, 0.0];
-    pose
-}
-
 impl DenseGatsBench {
     /// Runs the bench on a character bound to `body`.
     pub fn run(
@@ -163,36 +128,20 @@ impl DenseGatsBench {
             message: e.to_string(),
         })?;
         progress("character");
-        let character = bench_character(body, self.vertices, cfg.influences)?;
-        let (n, s) = (character.vertex_count(), body.joint_count());
+        let setup = Setup::new(body, self.vertices, cfg.influences, cfg.inputs(), self.reps)?;
         let device = cpu();
         let net = cfg
             .init(&device)
             .map_err(BenchError::stage("the network"))?;
-        let pose = bench_pose();
-        progress("inputs");
-        let reps = self.reps;
-        let inputs_ms = try_median_ms(reps, || {
-            character
-                .pose_input(&pose, [0.0; 3], cfg.inputs())
-                .map(|_| ())
-        })
-        .map_err(BenchError::stage("pose inputs"))?;
-        let features = character
-            .pose_input(&pose, [0.0; 3], cfg.inputs())
-            .map_err(BenchError::stage("pose inputs"))?
-            .features;
-        let x = Features::new(features, 6 + s).map_err(BenchError::stage("pose inputs"))?;
-        let batch = character.batch();
-        let adjacency = batch.adjacency();
+        let (x, reps) = (&setup.x, self.reps);
+        let adjacency = setup.character.batch().adjacency();
         progress("network");
         let fast: DenseGatsInference = net.inference();
-        let nn = BenchError::stage("network");
-        let input_mlp_ms = try_median_ms(reps, || fast.input.forward(&x).map(drop))
+        let input_mlp_ms = try_median_ms(reps, || fast.input.forward(x).map(drop))
             .map_err(BenchError::stage("input transform"))?;
         let mut h = fast
             .input
-            .forward(&x)
+            .forward(x)
             .map_err(BenchError::stage("input transform"))?;
         let mut modules_ms = Vec::new();
         for k in 0..fast.modules.len() {
@@ -206,20 +155,10 @@ impl DenseGatsBench {
         }
         let output_mlp_ms = try_median_ms(reps, || fast.output(&h).map(drop))
             .map_err(BenchError::stage("output transform"))?;
-        let network_ms =
-            try_median_ms(reps, || fast.forward_features(&x, adjacency).map(drop)).map_err(nn)?;
-        let tensor = x.clone().into_tensor(&device);
-        let reference_ms = try_median_ms(reps, || {
-            net.forward(tensor.clone(), batch)
-                .map(|t| drop(t.into_data()))
-        })
-        .map_err(BenchError::stage("reference network"))?;
-        let frame_ms = try_median_ms(reps, || {
-            let input = character.pose_input(&pose, [0.0; 3], cfg.inputs())?;
-            let x = Tensor::<2>::from_data(TensorData::new(input.features, [n, 6 + s]), &device);
-            fast.forward(x, batch).map(|t| drop(t.into_data()))
-        })
-        .map_err(BenchError::stage("frame"))?;
+        let network_ms = try_median_ms(reps, || fast.forward_features(x, adjacency).map(drop))
+            .map_err(BenchError::stage("network"))?;
+        let (reference_ms, frame_ms) = setup.whole_ms(reps, &net, &fast, &device)?;
+        let n = setup.character.vertex_count();
         let parameters = burn::module::Module::num_params(&net);
         Ok(DenseGatsFigures {
             bench: "densegats",
@@ -227,7 +166,7 @@ impl DenseGatsBench {
             vertices: n,
             threads: rayon::current_num_threads(),
             parameters,
-            inputs_ms,
+            inputs_ms: setup.inputs_ms,
             input_mlp_ms,
             modules_ms,
             output_mlp_ms,

@@ -8,6 +8,8 @@
 //! - [`multilevel`]: the Multilevel model's inference stages and training step;
 //! - [`gat`]: one GAT layer, fused kernel against burn's generic path;
 //! - [`densegats`]: DenseGATs per stage on a character, with the linear maps' floor;
+//! - [`multiresgnet`]: MultiResGNet per stage on the same character (`refine`: what the
+//!   two share);
 //! - [`simulate`]: the cloth simulator on a garment and a motion, cost and quality.
 //!
 //! Figures are wall-clock times on the calling thread pool (rayon's, sized by
@@ -18,6 +20,7 @@ pub mod error;
 pub mod gat;
 pub mod multilevel;
 pub mod multiresgnet;
+mod refine;
 pub mod simulate;
 pub mod timing;
 

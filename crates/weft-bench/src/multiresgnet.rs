@@ -7,15 +7,13 @@
 //! layers, as training runs them) is timed whole beside them. The target: no
 //! slower than 1.5× DenseGATs at the same widths' preset and size.
 
-use burn::tensor::{Tensor, TensorData};
 use serde::Serialize;
 use weft_body::BodyModel;
 use weft_models::multiresgnet::{MultiResGnetConfig, MultiResGnetInference};
-use weft_models::refine::{RefineConfig, RefineNet};
+use weft_models::refine::RefineConfig;
 use weft_nn::backend::cpu;
-use weft_nn::infer::Features;
 
-use crate::densegats::{bench_character, bench_pose};
+use crate::refine::Setup;
 use crate::timing::try_median_ms;
 use crate::{BenchError, Row};
 
@@ -91,34 +89,20 @@ impl MultiResGnetBench {
             message: e.to_string(),
         })?;
         progress("character");
-        let character = bench_character(body, self.vertices, cfg.influences)?;
-        let (n, s) = (character.vertex_count(), body.joint_count());
+        let setup = Setup::new(body, self.vertices, cfg.influences, cfg.inputs(), self.reps)?;
         let device = cpu();
         let net = cfg
             .init(&device)
             .map_err(BenchError::stage("the network"))?;
-        let pose = bench_pose();
-        progress("inputs");
-        let reps = self.reps;
-        let inputs_ms = try_median_ms(reps, || {
-            character
-                .pose_input(&pose, [0.0; 3], cfg.inputs())
-                .map(drop)
-        })
-        .map_err(BenchError::stage("pose inputs"))?;
-        let features = character
-            .pose_input(&pose, [0.0; 3], cfg.inputs())
-            .map_err(BenchError::stage("pose inputs"))?
-            .features;
-        let x = Features::new(features, 6 + s).map_err(BenchError::stage("pose inputs"))?;
-        let batch = character.batch();
+        let (x, reps) = (&setup.x, self.reps);
+        let batch = setup.character.batch();
         progress("network");
         let fast: MultiResGnetInference = net.inference();
-        let input_mlp_ms = try_median_ms(reps, || fast.input.forward(&x).map(drop))
+        let input_mlp_ms = try_median_ms(reps, || fast.input.forward(x).map(drop))
             .map_err(BenchError::stage("input transform"))?;
         let v = fast
             .input
-            .forward(&x)
+            .forward(x)
             .map_err(BenchError::stage("input transform"))?;
         let local_ms = try_median_ms(reps, || {
             fast.multires.local.forward(&v, batch.adjacency()).map(drop)
@@ -141,27 +125,16 @@ impl MultiResGnetBench {
             None => fast.head.forward(&h).map(drop),
         })
         .map_err(BenchError::stage("output transform"))?;
-        let network_ms = try_median_ms(reps, || fast.forward_features(&x, batch).map(drop))
+        let network_ms = try_median_ms(reps, || fast.forward_features(x, batch).map(drop))
             .map_err(BenchError::stage("network"))?;
-        let tensor = x.clone().into_tensor(&device);
-        let reference_ms = try_median_ms(reps, || {
-            net.forward(tensor.clone(), batch)
-                .map(|t| drop(t.into_data()))
-        })
-        .map_err(BenchError::stage("reference network"))?;
-        let frame_ms = try_median_ms(reps, || {
-            let input = character.pose_input(&pose, [0.0; 3], cfg.inputs())?;
-            let x = Tensor::<2>::from_data(TensorData::new(input.features, [n, 6 + s]), &device);
-            fast.forward(x, batch).map(|t| drop(t.into_data()))
-        })
-        .map_err(BenchError::stage("frame"))?;
+        let (reference_ms, frame_ms) = setup.whole_ms(reps, &net, &fast, &device)?;
         Ok(MultiResGnetFigures {
             bench: "multiresgnet",
             preset: self.preset.clone(),
-            vertices: n,
+            vertices: setup.character.vertex_count(),
             threads: rayon::current_num_threads(),
             parameters: burn::module::Module::num_params(&net),
-            inputs_ms,
+            inputs_ms: setup.inputs_ms,
             input_mlp_ms,
             local_ms,
             global_ms,
