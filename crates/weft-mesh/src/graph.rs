@@ -122,6 +122,27 @@ impl Graph {
         out
     }
 
+    /// `field` after `rounds` Jacobi rounds of `f_i ← ½ f_i + ½ mean_{j∼i} f_j` (a
+    /// vertex without neighbours keeps its value): the Laplacian smoothing that spreads a
+    /// garment's resize displacements and makes GarFitNet's coarse targets.
+    pub fn jacobi_smooth(&self, field: &[[f64; 3]], rounds: usize) -> Vec<[f64; 3]> {
+        use crate::vec3::{add, scale};
+        let mut field = field.to_vec();
+        for _ in 0..rounds {
+            field = (0..field.len())
+                .map(|i| {
+                    let nb = self.neighbors(i);
+                    if nb.is_empty() {
+                        return field[i];
+                    }
+                    let sum = nb.iter().fold([0.0; 3], |s, &j| add(s, field[j as usize]));
+                    add(scale(field[i], 0.5), scale(sum, 0.5 / nb.len() as f64))
+                })
+                .collect();
+        }
+        field
+    }
+
     /// Whether `a` and `b` are adjacent (binary search in the sorted list of `a`).
     pub fn has_edge(&self, a: usize, b: usize) -> bool {
         self.neighbors(a).binary_search(&(b as u32)).is_ok()
@@ -236,6 +257,22 @@ mod tests {
     fn path(n: u32) -> Graph {
         let edges: Vec<[u32; 2]> = (0..n - 1).map(|i| [i, i + 1]).collect();
         Graph::from_edges(n as usize, &edges)
+    }
+
+    #[test]
+    fn jacobi_smoothing_averages_with_the_neighbours_and_keeps_isolated_vertices() {
+        // 0 - 1 - 2, and 3 alone.
+        let g = Graph::from_edges(4, &[[0, 1], [1, 2]]);
+        let f = [[0.0; 3], [1.0, 2.0, 0.0], [0.0; 3], [5.0; 3]];
+        let once = g.jacobi_smooth(&f, 1);
+        assert_eq!(once[0], [0.5, 1.0, 0.0]);
+        assert_eq!(once[1], [0.5, 1.0, 0.0]);
+        assert_eq!(once[2], [0.5, 1.0, 0.0]);
+        assert_eq!(once[3], [5.0; 3]);
+        assert_eq!(g.jacobi_smooth(&f, 0), f.to_vec());
+        // Many rounds flatten a component to a constant.
+        let many = path(5).jacobi_smooth(&[[0.0; 3], [0.0; 3], [5.0; 3], [0.0; 3], [0.0; 3]], 200);
+        assert!(many.iter().all(|v| (v[0] - many[0][0]).abs() < 1e-6));
     }
 
     #[test]

@@ -137,7 +137,9 @@ pub fn resize(
             })
         });
     }
-    smooth(garment, &mut field, options.smoothing_rounds);
+    let field = garment
+        .graph()
+        .jacobi_smooth(&field, options.smoothing_rounds);
 
     let mut moved = TriMesh::new(
         garment
@@ -183,27 +185,6 @@ pub fn resize(
         max_push,
         after,
     })
-}
-
-/// Jacobi rounds of `D_i ← ½ D_i + ½ mean_{j∼i} D_j` over the garment's edges.
-fn smooth(garment: &TriMesh, field: &mut Vec<[f64; 3]>, rounds: usize) {
-    if rounds == 0 {
-        return;
-    }
-    let graph = garment.graph();
-    for _ in 0..rounds {
-        let next: Vec<[f64; 3]> = (0..field.len())
-            .map(|i| {
-                let nb = graph.neighbors(i);
-                if nb.is_empty() {
-                    return field[i];
-                }
-                let sum = nb.iter().fold([0.0; 3], |s, &j| add(s, field[j as usize]));
-                add(scale(field[i], 0.5), scale(sum, 0.5 / nb.len() as f64))
-            })
-            .collect();
-        *field = next;
-    }
 }
 
 fn check_same_body(from: &FitBody, to: &FitBody) -> Result<(), PrepareError> {

@@ -185,6 +185,23 @@ pub struct Correction {
 }
 
 impl Correction {
+    /// The decomposed output of two heads (§4.3.2): `δ = f_norm(tanh(g))` (eq. 4.10) from
+    /// the direction head's `[N, 3]`, `Δ' = relu(v)` (eq. 4.9) from the length head's
+    /// `[N, 1]`.
+    pub fn from_heads(g: Tensor<2>, v: Tensor<2>) -> Self {
+        let g = g.tanh();
+        let norm = g
+            .clone()
+            .powi_scalar(2)
+            .sum_dim(1)
+            .sqrt()
+            .clamp_min(MIN_NORM);
+        Correction {
+            direction: g / norm,
+            length: burn::tensor::activation::relu(v),
+        }
+    }
+
     /// The correction `Δ = Δ' δ`, `[N, 3]`.
     pub fn vector(&self) -> Tensor<2> {
         self.direction.clone() * self.length.clone()
@@ -239,17 +256,10 @@ impl GarFitNet {
             .forward(self.garfit.forward(garfit).map_err(nn)?);
         let per_node = weight.select(0, graph.membership_tensor(&features.device()));
         let h = features * per_node;
-        let g = self.direction.forward(h.clone(), graph)?.tanh();
-        let norm = g
-            .clone()
-            .powi_scalar(2)
-            .sum_dim(1)
-            .sqrt()
-            .clamp_min(MIN_NORM);
-        Ok(Correction {
-            direction: g / norm,
-            length: burn::tensor::activation::relu(self.length.forward(h, graph)?),
-        })
+        Ok(Correction::from_heads(
+            self.direction.forward(h.clone(), graph)?,
+            self.length.forward(h, graph)?,
+        ))
     }
 }
 
