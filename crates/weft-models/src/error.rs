@@ -96,6 +96,17 @@ pub enum ModelError {
 }
 
 impl ModelError {
+    /// The first of `fields` (config name, value) that is 0, as a configuration error
+    /// naming it; sizes of layers, blocks and heads must be at least 1.
+    pub fn check_positive(fields: &[(&str, usize)]) -> Result<(), ModelError> {
+        match fields.iter().find(|(_, v)| *v == 0) {
+            Some((field, _)) => Err(ModelError::Config(format!(
+                "{field} = 0; expected at least 1"
+            ))),
+            None => Ok(()),
+        }
+    }
+
     /// A [`ModelError::Mismatch`] from displayable values.
     pub fn mismatch(
         what: impl Into<String>,

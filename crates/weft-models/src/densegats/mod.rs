@@ -109,19 +109,13 @@ impl DenseGatsConfig {
 
     /// Checks the values; errors name the field.
     pub fn validate(&self) -> Result<(), ModelError> {
-        for (field, v) in [
+        ModelError::check_positive(&[
             ("joints", self.joints),
             ("influences", self.influences),
             ("blocks", self.blocks),
             ("channels", self.channels),
             ("heads", self.heads),
-        ] {
-            if v == 0 {
-                return Err(ModelError::Config(format!(
-                    "{field} = 0; expected at least 1"
-                )));
-            }
-        }
+        ])?;
         if self.input_widths.is_empty()
             || self.input_widths.contains(&0)
             || self.output_widths.contains(&0)

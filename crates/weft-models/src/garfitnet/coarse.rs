@@ -71,18 +71,12 @@ pub struct CoarseRegressorConfig {
 impl CoarseRegressorConfig {
     /// Builds the network; errors name the field.
     pub fn init(&self, device: &Device) -> Result<CoarseRegressor, ModelError> {
-        for (field, v) in [
+        ModelError::check_positive(&[
             ("node_features", self.node_features),
             ("blocks", self.blocks),
             ("channels", self.channels),
             ("heads", self.heads),
-        ] {
-            if v == 0 {
-                return Err(ModelError::Config(format!(
-                    "{field} = 0; expected at least 1"
-                )));
-            }
-        }
+        ])?;
         let mut d = self.node_features;
         let mut blocks = Vec::with_capacity(self.blocks);
         for _ in 0..self.blocks {

@@ -99,7 +99,7 @@ impl GarFitNetConfig {
 
     /// Builds the network; errors name the field.
     pub fn init(&self, device: &Device) -> Result<GarFitNet, ModelError> {
-        for (field, v) in [
+        ModelError::check_positive(&[
             ("node_features", self.node_features),
             ("garfit_features", self.garfit_features),
             ("graph_channels", self.graph_channels),
@@ -108,13 +108,7 @@ impl GarFitNetConfig {
             ("branch_channels", self.branch_channels),
             ("branch_heads", self.branch_heads),
             ("global_blocks", self.global_blocks),
-        ] {
-            if v == 0 {
-                return Err(ModelError::Config(format!(
-                    "{field} = 0; expected at least 1"
-                )));
-            }
-        }
+        ])?;
         if self.garfit_widths.is_empty() || self.garfit_widths.contains(&0) {
             return Err(ModelError::Config(
                 "garfit_widths needs at least one layer and no width may be 0".into(),

@@ -116,20 +116,14 @@ impl MultiResGnetConfig {
     /// Checks the values; errors name the field.
     pub fn validate(&self) -> Result<(), ModelError> {
         let global_blocks = if self.global { self.global_blocks } else { 1 };
-        for (field, v) in [
+        ModelError::check_positive(&[
             ("joints", self.joints),
             ("influences", self.influences),
             ("local_blocks", self.local_blocks),
             ("channels", self.channels),
             ("heads", self.heads),
             ("global_blocks", global_blocks),
-        ] {
-            if v == 0 {
-                return Err(ModelError::Config(format!(
-                    "{field} = 0; expected at least 1"
-                )));
-            }
-        }
+        ])?;
         if self.input_widths.is_empty() || self.input_widths.contains(&0) {
             return Err(ModelError::Config(
                 "input_widths needs at least one layer and no width may be 0".into(),
