@@ -26,7 +26,9 @@ use weft_body::Skinning;
 use weft_nn::{Activation, DenseGatModule, DenseGatModuleConfig, GraphBatch, Mlp, NormedGat};
 
 use crate::error::ModelError;
-use crate::refine::{nn_error as nn, tanh_mlp, Frame, InputSpec, PositionFeature, RefineNet};
+use crate::refine::{
+    nn_error as nn, output_transform, tanh_mlp, Frame, InputSpec, PositionFeature, RefineNet,
+};
 
 mod inference;
 
@@ -161,13 +163,7 @@ impl DenseGatsConfig {
             d = m.output_width();
             modules.push(m);
         }
-        let hidden = if self.output_widths.is_empty() {
-            None
-        } else {
-            let mlp = tanh_mlp(d, &self.output_widths, self.batch_norm, device)?;
-            d = mlp.output_width();
-            Some(mlp)
-        };
+        let (hidden, d) = output_transform(d, &self.output_widths, self.batch_norm, device)?;
         Ok(DenseGats {
             input,
             modules,

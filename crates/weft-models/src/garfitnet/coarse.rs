@@ -19,7 +19,7 @@ use weft_nn::{Activation, GatBlockConfig, GraphBatch, Mlp, NormedGat, NormedGatC
 
 use super::network::Correction;
 use crate::error::ModelError;
-use crate::refine::{nn_error as nn, tanh_mlp};
+use crate::refine::{nn_error as nn, output_transform};
 
 /// For every garment vertex (rest pose), its nearest body vertex (rest pose, the body the
 /// garment was made for).
@@ -92,12 +92,7 @@ impl CoarseRegressorConfig {
             d = block.output_width();
             blocks.push(block);
         }
-        let hidden = if self.output_widths.is_empty() {
-            None
-        } else {
-            Some(tanh_mlp(d, &self.output_widths, self.batch_norm, device)?)
-        };
-        let d = hidden.as_ref().map_or(d, Mlp::output_width);
+        let (hidden, d) = output_transform(d, &self.output_widths, self.batch_norm, device)?;
         Ok(CoarseRegressor {
             blocks,
             hidden,

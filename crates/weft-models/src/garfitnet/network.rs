@@ -28,7 +28,7 @@ use weft_nn::{
 };
 
 use crate::error::ModelError;
-use crate::refine::{nn_error as nn, tanh_mlp};
+use crate::refine::{nn_error as nn, output_transform};
 
 /// Lengths below this make a direction of zero length: `f_norm` divides by at least it.
 const MIN_NORM: f64 = 1e-6;
@@ -125,13 +125,12 @@ impl GarFitNetConfig {
         let weight = LinearConfig::new(garfit.output_width(), self.graph_width()).init(device);
         let branch = |out: usize| -> Result<Branch, ModelError> {
             let multires = self.branch().init(device).map_err(nn)?;
-            let d = multires.output_width();
-            let hidden = if self.output_widths.is_empty() {
-                None
-            } else {
-                Some(tanh_mlp(d, &self.output_widths, self.batch_norm, device)?)
-            };
-            let d_head = hidden.as_ref().map_or(d, Mlp::output_width);
+            let (hidden, d_head) = output_transform(
+                multires.output_width(),
+                &self.output_widths,
+                self.batch_norm,
+                device,
+            )?;
             Ok(Branch {
                 multires,
                 hidden,

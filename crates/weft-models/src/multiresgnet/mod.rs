@@ -28,7 +28,9 @@ use weft_body::Skinning;
 use weft_nn::{Activation, GraphBatch, Mlp, MultiResGModule, MultiResGModuleConfig};
 
 use crate::error::ModelError;
-use crate::refine::{nn_error as nn, tanh_mlp, Frame, InputSpec, PositionFeature, RefineNet};
+use crate::refine::{
+    nn_error as nn, output_transform, tanh_mlp, Frame, InputSpec, PositionFeature, RefineNet,
+};
 
 mod inference;
 
@@ -172,18 +174,12 @@ impl MultiResGnetConfig {
             .multires(input.output_width())
             .init(device)
             .map_err(nn)?;
-        let fused = multires.output_width();
-        let hidden = if self.output_widths.is_empty() {
-            None
-        } else {
-            Some(tanh_mlp(
-                fused,
-                &self.output_widths,
-                self.batch_norm,
-                device,
-            )?)
-        };
-        let d_head = hidden.as_ref().map_or(fused, Mlp::output_width);
+        let (hidden, d_head) = output_transform(
+            multires.output_width(),
+            &self.output_widths,
+            self.batch_norm,
+            device,
+        )?;
         Ok(MultiResGnet {
             input,
             multires,

@@ -96,6 +96,22 @@ pub fn tanh_mlp(
         .map_err(nn_error)
 }
 
+/// The hidden layers of an output transform (a [`tanh_mlp`] of `widths`, or none when
+/// `widths` is empty) and the width the last linear layer after them reads.
+pub fn output_transform(
+    d_input: usize,
+    widths: &[usize],
+    batch_norm: bool,
+    device: &Device,
+) -> Result<(Option<Mlp>, usize), ModelError> {
+    if widths.is_empty() {
+        return Ok((None, d_input));
+    }
+    let mlp = tanh_mlp(d_input, widths, batch_norm, device)?;
+    let d = mlp.output_width();
+    Ok((Some(mlp), d))
+}
+
 /// A layer's error as a model error (shapes and sizes the config should have caught).
 pub(crate) fn nn_error(e: weft_nn::NnError) -> ModelError {
     ModelError::Config(e.to_string())
