@@ -58,6 +58,15 @@ pub struct SequenceOptions {
     /// attachment's: straps, a belt, a sewn-on patch, or a whole garment held in place
     /// with `attachment = "none"`. Default: none.
     pub pinned: Vec<u32>,
+    /// Where the garment starts on this body in its rest pose, one position per garment
+    /// vertex, when that differs from its rest shape: a garment made for another body
+    /// (the mesh passed to [`simulate_sequence`] is its pattern, the rest shape its
+    /// energies are measured from; these are where it sits on this body, e.g. from
+    /// `weft_garment::prepare::fit_onto`). Like the mesh they are in the body's rest
+    /// frame: frame 0's root translation is added. Default: `None`, the garment starts
+    /// as its rest mesh.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_positions: Option<Vec<[f64; 3]>>,
 }
 
 /// Newton iterations per sub-step in a sequence: a fixed budget (the energy still
@@ -79,6 +88,7 @@ impl Default for SequenceOptions {
             max_frames: None,
             attachment: Attachment::TopOpening,
             pinned: Vec::new(),
+            start_positions: None,
         }
     }
 }
@@ -283,7 +293,10 @@ fn potential_energy(sim: &ClothSimulator) -> Result<f64, SimError> {
 
 /// Simulates `garment` (its rest mesh, fitted to `body` with `betas` in the body's rest
 /// pose, as weft_garment's generators make them) made of `material` on the body
-/// following `motion` at the motion's frame rate.
+/// following `motion` at the motion's frame rate. With
+/// [`SequenceOptions::start_positions`] the garment starts there instead (a garment made
+/// for another body, fitted onto this one), and `garment` stays its rest shape: strains
+/// and energies are measured from it.
 ///
 /// The first `warmup_frames` blend from the rest pose to the motion's first frame
 /// (draping the garment and letting it settle); then one output frame per motion frame
@@ -344,6 +357,26 @@ pub fn simulate_sequence(
         }
         .into());
     }
+    if let Some(start) = &opts.start_positions {
+        if start.len() != garment.vertex_count() {
+            return Err(SimError::InvalidParameter {
+                what: format!(
+                    "start_positions: number of positions (the garment has {} vertices)",
+                    garment.vertex_count()
+                ),
+                value: start.len() as f64,
+                expected: "expected one start position per garment vertex",
+            }
+            .into());
+        }
+        if let Some(i) = start.iter().position(|p| !weft_mesh::vec3::is_finite(*p)) {
+            return Err(SimError::InvalidVector {
+                what: format!("start_positions[{i}]"),
+                message: "not finite",
+            }
+            .into());
+        }
+    }
     let frames = opts
         .max_frames
         .map_or(motion.frame_count(), |m| m.min(motion.frame_count()));
@@ -361,13 +394,16 @@ pub fn simulate_sequence(
     let dt = 1.0 / (motion.fps() * opts.substeps as f64);
     let eps = opts.sim.collision_eps;
 
-    // The garment at the start: the rest mesh carried to frame 0's root translation,
-    // checked against (and pushed out of) the body at key frame 0.
+    // The garment at the start: the rest mesh (or the start positions) carried to frame
+    // 0's root translation, checked against (and pushed out of) the body at key frame 0.
     let mut body_prev = timeline.body(0)?;
     let mut posed = PosedBody::new(&body_prev, body.faces())?
         .with_query_radius(opts.sim.contact_radius.max(opts.sim.friction_radius))?;
     let t0 = motion.trans()[0].map(f64::from);
     let mut start = garment.clone();
+    if let Some(p) = &opts.start_positions {
+        start.positions.clone_from(p);
+    }
     for p in &mut start.positions {
         *p = add_scaled(*p, t0, 1.0);
     }
@@ -796,6 +832,75 @@ mod tests {
         let text = "attachment = \"none\"\npinned = [3, 1, 2]\n";
         let o: SequenceOptions = toml::from_str(text).unwrap();
         assert_eq!((o.attachment, o.pinned), (Attachment::None, vec![3, 1, 2]));
+    }
+
+    /// Issue 14: a garment started from other positions than its rest shape (here its
+    /// rest shape scaled by 1.03 about its centre, as a garment made for a slimmer body
+    /// sits on a fuller one) keeps its rest shape: frame 0 (no warm-up: the start state)
+    /// measures about 3 % strain against it, and the cloth relaxes back toward its rest
+    /// edge lengths. `None` and the rest mesh itself give the same frames; a wrong count
+    /// or a non-finite start position is refused naming the field.
+    #[test]
+    fn start_positions_start_the_garment_away_from_its_rest_shape() {
+        let body = weft_body::default_body().unwrap();
+        let rest = body.shaped(&[]).unwrap().vertices;
+        let skirt = test_skirt(&rest, 16, 4);
+        let n = skirt.vertex_count() as f64;
+        let centre = skirt
+            .positions
+            .iter()
+            .fold([0.0; 3], |s, p| add_scaled(s, *p, 1.0 / n));
+        let scaled: Vec<[f64; 3]> = skirt
+            .positions
+            .iter()
+            .map(|p| std::array::from_fn(|k| centre[k] + 1.03 * (p[k] - centre[k])))
+            .collect();
+        let base = SequenceOptions {
+            warmup_frames: 0,
+            substeps: 2,
+            ..SequenceOptions::default()
+        };
+        let run = |start: Option<Vec<[f64; 3]>>| {
+            let opts = SequenceOptions {
+                start_positions: start,
+                ..base.clone()
+            };
+            simulate_sequence(
+                &skirt,
+                &Material::cotton(),
+                &body,
+                &[],
+                &walk(8),
+                &opts,
+                &mut |_| {},
+            )
+        };
+        let seq = run(Some(scaled)).unwrap();
+        let strain: Vec<f64> = seq.stats.iter().map(|s| s.mean_edge_strain).collect();
+        assert!((strain[0] - 0.03).abs() < 1e-3, "{strain:?}");
+        assert!(strain[7] < 0.5 * strain[0], "{strain:?}");
+        assert!(seq.stats.iter().all(|s| s.energy.is_finite()));
+
+        let plain = run(None).unwrap();
+        assert!(
+            plain.stats[0].mean_edge_strain < 0.1 * strain[0],
+            "{:?}",
+            plain.stats[0]
+        );
+        assert_eq!(
+            plain.frames,
+            run(Some(skirt.positions.clone())).unwrap().frames
+        );
+
+        let e = run(Some(vec![[0.0; 3]; 3])).unwrap_err().to_string();
+        assert!(
+            e.contains("start_positions") && e.contains("one start position per garment vertex"),
+            "{e}"
+        );
+        let mut nan = skirt.positions.clone();
+        nan[5][1] = f64::NAN;
+        let e = run(Some(nan)).unwrap_err().to_string();
+        assert!(e.contains("start_positions[5]: not finite"), "{e}");
     }
 
     /// A step that diverges ends the run with the frame named and the finished frames
