@@ -32,6 +32,8 @@
 //!
 //! The garment's input shape is the rest shape of the cloth (its sewing pattern): the
 //! membrane and bending energies are measured from it, push-out included.
+//! [`drape_from`] separates the two: a pattern, and start positions (the pattern moved
+//! onto another body, [`super::fit_onto`]) that the checks, push-out and pins apply to.
 
 use std::time::Instant;
 
@@ -149,22 +151,47 @@ pub struct DrapeReport {
 }
 
 /// Drapes `garment` (its shape is also the cloth's rest shape) on `body` at rest, made
-/// of `material`. See the module docs.
+/// of `material`. See the module docs. The same as [`drape_from`] with the garment as
+/// both pattern and start.
 pub fn drape(
     garment: &TriMesh,
     body: &FitBody,
     material: &Material,
     options: &DrapeOptions,
 ) -> Result<DrapeReport, PrepareError> {
+    drape_from(garment, &garment.positions, body, material, options)
+}
+
+/// Drapes a garment whose rest shape (sewing pattern) is `pattern` from the positions
+/// `start` (one per pattern vertex, e.g. the pattern resized onto another body) on
+/// `body` at rest, made of `material`. The membrane and bending energies are measured
+/// from `pattern`, so a start stretched past the pattern pulls tight against the body
+/// and a start compressed below it relaxes outwards. The checks, push-out, pinning and
+/// settling are [`drape`]'s (module docs), applied to `start`; the report's
+/// `positions` are in `pattern`'s vertex order and faces.
+pub fn drape_from(
+    pattern: &TriMesh,
+    start: &[[f64; 3]],
+    body: &FitBody,
+    material: &Material,
+    options: &DrapeOptions,
+) -> Result<DrapeReport, PrepareError> {
     options.check()?;
-    check_finite(&garment.positions)?;
+    check_finite(&pattern.positions)?;
+    if start.len() != pattern.vertex_count() {
+        return Err(PrepareError::StartPositions {
+            given: start.len(),
+            expected: pattern.vertex_count(),
+        });
+    }
+    check_finite(start)?;
     let eps = options.sim.collision_eps;
     let posed = PosedBody::new(&body.mesh.positions, &body.mesh.faces)?
         .with_query_radius(options.sim.contact_radius.max(options.sim.friction_radius))?;
 
-    let signed = posed.signed_distances(&garment.positions)?;
+    let signed = posed.signed_distances(start)?;
     weft_sim::check_garment_gap(signed.iter().copied())?;
-    let before = posed.penetration(&garment.positions, eps)?;
+    let before = posed.penetration(start, eps)?;
     let too_deep: Vec<usize> = (0..signed.len())
         .filter(|&i| signed[i] < -options.max_start_depth)
         .collect();
@@ -180,22 +207,22 @@ pub fn drape(
         });
     }
 
-    let mut start = garment.clone();
-    body.push_out(&mut start.positions, eps)?;
-    spread_displacements(&mut start, &garment.positions, 20);
-    body.push_out(&mut start.positions, eps)?;
-    let pushed_out = start
+    let mut moved = TriMesh::new(start.to_vec(), pattern.faces.clone());
+    body.push_out(&mut moved.positions, eps)?;
+    spread_displacements(&mut moved, start, 20);
+    body.push_out(&mut moved.positions, eps)?;
+    let pushed_out = moved
         .positions
         .iter()
-        .zip(&garment.positions)
+        .zip(start)
         .filter(|(p, q)| p != q)
         .count();
 
     let clock = Instant::now();
-    let mut x = start.positions;
+    let mut x = moved.positions;
     let mut v = vec![[0.0; 3]; x.len()];
     let pins = if options.pin_top_opening {
-        weft_sim::attachment::top_opening(garment)
+        weft_sim::attachment::top_opening(pattern)
     } else {
         Vec::new()
     };
@@ -203,7 +230,7 @@ pub fn drape(
     let build = |scale: f64, x: &[[f64; 3]], v: &[[f64; 3]]| {
         let mut sim_options = options.sim;
         sim_options.gravity = options.sim.gravity.map(|g| g * scale);
-        let mut s = ClothSimulator::new(garment, material, sim_options)?;
+        let mut s = ClothSimulator::new(pattern, material, sim_options)?;
         s.set_state(x.to_vec(), v.to_vec())?;
         s.pin(&pins)?;
         Ok::<_, PrepareError>(s)

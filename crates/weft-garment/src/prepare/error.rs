@@ -16,6 +16,14 @@ pub enum PrepareError {
         /// Its position.
         position: [f64; 3],
     },
+    /// The start positions of a drape are not one per pattern vertex.
+    #[error("start positions: {given} given for a pattern of {expected} vertices; expected one start position per pattern vertex")]
+    StartPositions {
+        /// Positions given.
+        given: usize,
+        /// Pattern vertices.
+        expected: usize,
+    },
     /// A body query failed.
     #[error("body query: {0}")]
     Query(#[from] weft_body::query::QueryError),

@@ -254,3 +254,155 @@ fn bad_options_are_errors() {
         Err(PrepareError::BodyMismatch(_))
     ));
 }
+
+/// Mean distance from the garment's vertices to `body`, over the vertices within 5 cm
+/// of it on either body (`covered`: the part of the garment that rests on the body,
+/// waist and hips, not a flared hem), and the deepest vertex inside the body.
+fn fit_distances(positions: &[[f64; 3]], body: &FitBody, covered: &[bool]) -> (f64, f64) {
+    let closest = body.surface.closest_points(positions).expect("closest");
+    let d: Vec<f64> = closest
+        .iter()
+        .zip(covered)
+        .filter(|(_, &c)| c)
+        .map(|(c, _)| c.signed_distance)
+        .collect();
+    let deepest = closest
+        .iter()
+        .map(|c| -c.signed_distance)
+        .fold(0.0, f64::max);
+    (d.iter().sum::<f64>() / d.len().max(1) as f64, deepest)
+}
+
+/// Issue 14: one skirt made on β = 0, fitted onto a heavier (β₄ = +1.5) and a thinner
+/// (β₄ = −1.5) body: it sits closer to the heavier body (tight) than to the thinner one
+/// (loose), on both is stretched or relaxed against its own pattern (mean edge strain
+/// of the fat fit above the thin fit's), and neither ends more than 4 mm inside.
+#[test]
+fn one_skirt_fits_tight_on_a_fat_body_and_loose_on_a_thin_one() {
+    let model = model();
+    let made = FitBody::new(&model, &[]).expect("β = 0");
+    let mut style = Style::from_seed(GarmentKind::Skirt, 1);
+    style.length = crate::SkirtLength::Knee;
+    let pattern = made
+        .generate(GarmentKind::Skirt, &style, 600)
+        .expect("skirt")
+        .mesh;
+    let options = FitOntoOptions {
+        drape: DrapeOptions {
+            max_frames: 40,
+            ..DrapeOptions::default()
+        },
+        ..FitOntoOptions::default()
+    };
+    let silk = Material::silk();
+    let edges = pattern.edges();
+    let strain = |p: &[[f64; 3]]| {
+        edges
+            .iter()
+            .map(|&[a, b]| {
+                let l0 = weft_mesh::vec3::dist(
+                    pattern.positions[a as usize],
+                    pattern.positions[b as usize],
+                );
+                weft_mesh::vec3::dist(p[a as usize], p[b as usize]) / l0 - 1.0
+            })
+            .sum::<f64>()
+            / edges.len() as f64
+    };
+    let mut fits = Vec::new();
+    for w in [1.5, -1.5] {
+        let to = FitBody::new(&model, &[0.0, 0.0, 0.0, w]).expect("β");
+        let (fitted, report) = fit_onto(&pattern, &made, &to, &silk, &options).expect("fit");
+        assert_eq!(fitted.len(), pattern.vertex_count());
+        assert_eq!(fitted, report.drape.positions);
+        fits.push((to, fitted, report));
+    }
+    // Covered: within 5 cm of the body on both fits.
+    let near = |f: &(FitBody, Vec<[f64; 3]>, FitOntoReport)| -> Vec<bool> {
+        f.0.surface
+            .closest_points(&f.1)
+            .expect("closest")
+            .iter()
+            .map(|c| c.distance < 0.05)
+            .collect()
+    };
+    let covered: Vec<bool> = near(&fits[0])
+        .into_iter()
+        .zip(near(&fits[1]))
+        .map(|(a, b)| a || b)
+        .collect();
+    let count = covered.iter().filter(|&&c| c).count();
+    assert!(count > pattern.vertex_count() / 4, "{count} covered");
+    let (fat_mean, fat_deep) = fit_distances(&fits[0].1, &fits[0].0, &covered);
+    let (thin_mean, thin_deep) = fit_distances(&fits[1].1, &fits[1].0, &covered);
+    let (fat_strain, thin_strain) = (strain(&fits[0].1), strain(&fits[1].1));
+    for (name, f) in [("fat", &fits[0]), ("thin", &fits[1])] {
+        let r = &f.2;
+        eprintln!(
+            "{name}: resize moved mean {:.1} mm, drape {} frames ({:.1} s) settled {}, after {:?}",
+            r.resize.mean_displacement * 1e3,
+            r.drape.frames,
+            r.drape.seconds,
+            r.drape.settled,
+            r.drape.after
+        );
+    }
+    eprintln!(
+        "{count} covered vertices: mean distance fat {:.1} mm, thin {:.1} mm; deepest fat {:.1} mm, thin {:.1} mm; mean strain fat {:.4}, thin {:.4}",
+        fat_mean * 1e3,
+        thin_mean * 1e3,
+        fat_deep * 1e3,
+        thin_deep * 1e3,
+        fat_strain,
+        thin_strain
+    );
+    assert!(fat_mean < thin_mean, "fat {fat_mean} vs thin {thin_mean}");
+    assert!(
+        fat_strain > thin_strain,
+        "fat {fat_strain} vs thin {thin_strain}"
+    );
+    assert!(
+        fat_deep < 0.004 && thin_deep < 0.004,
+        "{fat_deep} {thin_deep}"
+    );
+}
+
+/// `drape_from` refuses start positions that are not one per pattern vertex or not
+/// finite, naming what it expected; `drape` is `drape_from` from the pattern itself.
+#[test]
+fn drape_from_checks_its_start_and_drape_is_drape_from_the_pattern() {
+    let model = model();
+    let body = FitBody::new(&model, &[]).expect("body");
+    let g = body
+        .generate(
+            GarmentKind::Skirt,
+            &Style::from_seed(GarmentKind::Skirt, 0),
+            300,
+        )
+        .expect("skirt")
+        .mesh;
+    let cotton = Material::cotton();
+    let options = DrapeOptions {
+        max_frames: 3,
+        ..DrapeOptions::default()
+    };
+    let e = drape_from(&g, &g.positions[1..], &body, &cotton, &options).unwrap_err();
+    assert!(
+        matches!(e, PrepareError::StartPositions { given, expected } if given + 1 == expected),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .contains("one start position per pattern vertex"),
+        "{e}"
+    );
+    let mut nan = g.positions.clone();
+    nan[7][2] = f64::INFINITY;
+    assert!(matches!(
+        drape_from(&g, &nan, &body, &cotton, &options),
+        Err(PrepareError::NonFinite { index: 7, .. })
+    ));
+    let a = drape(&g, &body, &cotton, &options).expect("drape");
+    let b = drape_from(&g, &g.positions, &body, &cotton, &options).expect("drape_from");
+    assert_eq!(a.positions, b.positions);
+}
