@@ -49,7 +49,10 @@ impl ModelKind {
     pub fn is_implemented(self) -> bool {
         matches!(
             self,
-            ModelKind::Multilevel | ModelKind::DenseGats | ModelKind::MultiResGnet
+            ModelKind::Multilevel
+                | ModelKind::DenseGats
+                | ModelKind::MultiResGnet
+                | ModelKind::GarFitNet
         )
     }
 }
@@ -112,7 +115,8 @@ mod tests {
             [
                 ModelKind::Multilevel,
                 ModelKind::DenseGats,
-                ModelKind::MultiResGnet
+                ModelKind::MultiResGnet,
+                ModelKind::GarFitNet
             ]
         );
     }

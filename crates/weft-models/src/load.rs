@@ -6,6 +6,7 @@ use std::path::Path;
 
 use crate::deformer::Deformer;
 use crate::error::ModelError;
+use crate::garfitnet::GarFitPredictor;
 use crate::kind::ModelKind;
 use crate::multilevel::Predictor;
 use crate::refine::RefinePredictor;
@@ -20,6 +21,7 @@ pub fn load_deformer(dir: &Path) -> Result<Box<dyn Deformer + Send>, ModelError>
     match header.model {
         ModelKind::Multilevel => Ok(Box::new(Predictor::load(dir)?)),
         ModelKind::DenseGats | ModelKind::MultiResGnet => Ok(Box::new(RefinePredictor::load(dir)?)),
+        ModelKind::GarFitNet => Ok(Box::new(GarFitPredictor::load(dir)?)),
         other => Err(ModelError::Run {
             path: dir.join("config.toml"),
             message: format!(

@@ -6,7 +6,9 @@ use std::path::Path;
 
 use weft_data::Dataset;
 use weft_eval::evaluate::{evaluate, write_report, EvalOptions, Evaluation};
-use weft_models::{load_deformer, Deformer, SkinningBaseline};
+use weft_models::garfitnet::GarFitPredictor;
+use weft_models::run::read_run_config;
+use weft_models::{load_deformer, Deformer, ModelKind, SkinningBaseline};
 
 use crate::error::{stage, PipelineError};
 
@@ -19,14 +21,34 @@ pub fn evaluate_run(
     opts: &EvalOptions,
     progress: &mut dyn FnMut(&str),
 ) -> Result<(Evaluation, std::path::PathBuf), PipelineError> {
-    let model = load_deformer(run).map_err(stage(&format!("loading run {}", run.display())))?;
+    let loading = || format!("loading run {}", run.display());
     let dataset =
         Dataset::open(data).map_err(stage(&format!("opening dataset {}", data.display())))?;
-    let methods: [&dyn Deformer; 3] = [
-        model.as_ref(),
-        &SkinningBaseline::LBS,
+    // GarFitNet is scored twice: its coarse regressor alone and the refined output
+    // (Tables 4.1–4.2).
+    let garfit = match read_run_config(run).map_err(stage(&loading()))?.0.model {
+        ModelKind::GarFitNet => Some(GarFitPredictor::load(run).map_err(stage(&loading()))?),
+        _ => None,
+    };
+    let model = match &garfit {
+        Some(_) => None,
+        None => Some(load_deformer(run).map_err(stage(&loading()))?),
+    };
+    let coarse = garfit.as_ref().map(GarFitPredictor::coarse_stage);
+    let mut methods: Vec<&dyn Deformer> = Vec::new();
+    if let Some(g) = &garfit {
+        methods.push(g);
+    }
+    if let Some(c) = &coarse {
+        methods.push(c);
+    }
+    if let Some(m) = &model {
+        methods.push(m.as_ref());
+    }
+    methods.extend([
+        &SkinningBaseline::LBS as &dyn Deformer,
         &SkinningBaseline::DQS,
-    ];
+    ]);
     let eval = evaluate(&methods, run, &dataset, opts, progress)?;
     let html = write_report(&eval, &run.join("report"))?;
     Ok((eval, html))

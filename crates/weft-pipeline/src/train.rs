@@ -11,6 +11,7 @@ use weft_models::refine::RefineConfig;
 use weft_models::ModelKind;
 use weft_nn::backend::{cpu_autodiff, seeded};
 use weft_train::run_config::{ModelSettings, RunConfig, TaskSettings};
+use weft_train::tasks::garfit::{load_fit_data, save_stats, GarFitRun, GarFitTask};
 use weft_train::tasks::refine::config::{DenseGatsRun, MultiResGnetRun, RefineTraining};
 use weft_train::tasks::refine::{fit_normalizer, load_split, save_normalizer, RefineTask};
 use weft_train::{train, MultilevelRun, MultilevelTask, Outcome, RunOptions, TrainTask};
@@ -64,6 +65,7 @@ pub fn preset_toml(kind: ModelKind, preset: &str) -> Result<String, PipelineErro
         ModelKind::Multilevel => Ok(MultilevelRun::preset(preset)?.to_toml()?),
         ModelKind::DenseGats => Ok(DenseGatsRun::preset(preset)?.to_toml()?),
         ModelKind::MultiResGnet => Ok(MultiResGnetRun::preset(preset)?.to_toml()?),
+        ModelKind::GarFitNet => Ok(GarFitRun::preset(preset)?.to_toml()?),
         _ => unreachable!("refused by check_implemented"),
     }
 }
@@ -88,6 +90,10 @@ pub fn train_run(spec: &TrainSpec, log: &mut dyn FnMut(&str)) -> Result<Outcome,
         ModelKind::MultiResGnet => {
             let cfg: MultiResGnetRun = resolve(spec)?;
             train_refine(&cfg, spec, log)
+        }
+        ModelKind::GarFitNet => {
+            let cfg: GarFitRun = resolve(spec)?;
+            train_garfit(&cfg, spec, log)
         }
         _ => unreachable!("refused by check_implemented"),
     }
@@ -212,6 +218,60 @@ pub fn train_refine<M: ModelSettings + RefineConfig>(
         cfg.train.trainer.steps,
         spec.out.display()
     ));
+    let options = RunOptions {
+        resume: spec.resume,
+        progress: spec.progress,
+        session_steps: None,
+    };
+    let (_, outcome) = train(&mut task, model, &run, &options)?;
+    Ok(outcome)
+}
+
+/// Trains GarFitNet of `cfg` on the fit dataset in `spec.data` into `spec.out`: loads the
+/// training and validation pairs, fits α's factor model and the normalisers on the
+/// training ones (saved as `garfit.json` before the first step; a resumed run keeps its
+/// own), then runs the loop (coarse regressor, then refinement).
+pub fn train_garfit(
+    cfg: &GarFitRun,
+    spec: &TrainSpec,
+    log: &mut dyn FnMut(&str),
+) -> Result<Outcome, PipelineError> {
+    let set = weft_data::Dataset::open(&spec.data).map_err(stage(&format!(
+        "opening the fit dataset {}",
+        spec.data.display()
+    )))?;
+    let (mut stats, mut splits) = load_fit_data(&set, &cfg.model, &[Split::Validation])
+        .map_err(stage("loading the garment-body pairs"))?;
+    let run = cfg.run_dir(&spec.out)?;
+    if spec.resume && spec.out.join(weft_models::garfitnet::STATS_FILE).exists() {
+        stats = weft_models::garfitnet::GarFitStats::read(&spec.out)?;
+    } else {
+        save_stats(&spec.out, &stats)?;
+    }
+    let (Some(validation), Some(training)) = (splits.pop(), splits.pop()) else {
+        return Err(PipelineError::Invalid(
+            "loading the garment-body pairs gave no training or validation split".into(),
+        ));
+    };
+    let device = seeded(&cpu_autodiff(), cfg.train.trainer.seed);
+    let mut task = GarFitTask::new(
+        &cfg.train.task,
+        stats,
+        training,
+        validation,
+        cfg.train.trainer.seed,
+        &device,
+    )?;
+    let (sequences, pairs, frames) = task.describe();
+    log(&format!(
+        "training garfitnet ({} preset) on {sequences} sequences of {pairs} garment-body pairs ({frames} frames, {} per step; coarse regressor for {} of {} steps) -> {}",
+        cfg.preset,
+        cfg.train.task.frames,
+        cfg.train.task.coarse_steps(cfg.train.trainer.steps),
+        cfg.train.trainer.steps,
+        spec.out.display()
+    ));
+    let model = cfg.model.init(&device)?;
     let options = RunOptions {
         resume: spec.resume,
         progress: spec.progress,

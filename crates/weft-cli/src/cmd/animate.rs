@@ -10,6 +10,8 @@ use std::time::Instant;
 use weft_body::PosedSequence;
 use weft_eval::animate::{animate, push_out_of_body, write_animation};
 use weft_eval::skinned::write_skinned_animation;
+use weft_garment::prepare::{fit_onto, FitOntoOptions};
+use weft_garment::FitBody;
 use weft_mesh::export::ExportFormat;
 use weft_models::load_deformer;
 
@@ -53,6 +55,22 @@ pub struct AnimateArgs {
     /// margin garments are fitted with.
     #[arg(long, value_name = "MM")]
     push_out: Option<f64>,
+    /// The β the garment was made for (comma-separated), when that is not the --betas
+    /// body: it is first fitted onto the --betas body as GarFitNet's data is made
+    /// (resized, then draped in the rest pose with its own shape as the rest shape:
+    /// tight on a fuller body, loose on a slimmer one). Without it the garment must
+    /// already be dressed on the --betas body.
+    #[arg(
+        long,
+        value_name = "B0,B1,..",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    made_for: Option<Vec<f64>>,
+    /// The fabric of that drape: a preset (silk, cotton, jersey, denim, leather, hood) or
+    /// a TOML file of material fields.
+    #[arg(long, default_value = "silk", requires = "made_for")]
+    material: String,
     /// Print one JSON object describing what was written.
     #[arg(long)]
     json: bool,
@@ -78,7 +96,20 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let motion = args.motion.load(&body, &betas64, args.frames)?;
     let loaded = weft_mesh::io::load_mesh(&args.garment)
         .with_context(|| format!("reading the garment {}", args.garment.display()))?;
-    let garment = loaded.mesh;
+    let mut garment = loaded.mesh;
+    if let Some(made_for) = &args.made_for {
+        let material = super::cloth_args::material(&args.material)?;
+        let from = FitBody::new(&body, made_for).context("--made-for")?;
+        let to = FitBody::new(&body, &betas64).context("--betas")?;
+        let (fitted, _) = fit_onto(&garment, &from, &to, &material, &FitOntoOptions::default())
+            .with_context(|| {
+                format!(
+                    "fitting {} (made for --made-for) onto the --betas body",
+                    args.garment.display()
+                )
+            })?;
+        garment.positions = fitted;
+    }
     let deformer =
         load_deformer(&args.run).with_context(|| format!("loading run {}", args.run.display()))?;
     let started = Instant::now();

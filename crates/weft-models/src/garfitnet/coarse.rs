@@ -17,7 +17,7 @@ use weft_body::query::VertexTree;
 use weft_mesh::TriMesh;
 use weft_nn::{Activation, GatBlockConfig, GraphBatch, Mlp, NormedGat, NormedGatConfig};
 
-use super::network::Correction;
+use super::network::{positive_bias, Correction};
 use crate::error::ModelError;
 use crate::refine::{nn_error as nn, output_transform};
 
@@ -97,7 +97,7 @@ impl CoarseRegressorConfig {
             blocks,
             hidden,
             direction: LinearConfig::new(d, 3).init(device),
-            length: LinearConfig::new(d, 1).init(device),
+            length: positive_bias(LinearConfig::new(d, 1).init(device)),
         })
     }
 }

@@ -70,6 +70,14 @@ pub struct GarFitNetConfig {
     /// Batch normalisation after every layer but the last.
     #[config(default = true)]
     pub batch_norm: bool,
+    /// The GarFit parameter branch (§4.3.3); off: the graph features go to the branches
+    /// unweighted (Fig. 4.12's "without GarFit branch").
+    #[config(default = true)]
+    pub garfit_branch: bool,
+    /// The output as a length and a unit direction (§4.3.2); off: the direction branch's
+    /// three outputs are the correction itself (Fig. 4.12's "without decomposition").
+    #[config(default = true)]
+    pub decomposed: bool,
 }
 
 impl GarFitNetConfig {
@@ -116,13 +124,18 @@ impl GarFitNetConfig {
         }
         let first = self.block(self.node_features).init(device).map_err(nn)?;
         let second = self.block(first.output_width()).init(device).map_err(nn)?;
-        let garfit = MlpConfig::new(self.garfit_features, self.garfit_widths.clone())
-            .with_activation(Activation::Relu)
-            .with_output_activation(Activation::Relu)
-            .with_batch_norm(self.batch_norm)
-            .init(device)
-            .map_err(nn)?;
-        let weight = LinearConfig::new(garfit.output_width(), self.graph_width()).init(device);
+        let (garfit, weight) = if self.garfit_branch {
+            let garfit = MlpConfig::new(self.garfit_features, self.garfit_widths.clone())
+                .with_activation(Activation::Relu)
+                .with_output_activation(Activation::Relu)
+                .with_batch_norm(self.batch_norm)
+                .init(device)
+                .map_err(nn)?;
+            let weight = LinearConfig::new(garfit.output_width(), self.graph_width()).init(device);
+            (Some(garfit), Some(weight))
+        } else {
+            (None, None)
+        };
         let branch = |out: usize| -> Result<Branch, ModelError> {
             let multires = self.branch().init(device).map_err(nn)?;
             let (hidden, d_head) = output_transform(
@@ -137,12 +150,19 @@ impl GarFitNetConfig {
                 head: LinearConfig::new(d_head, out).init(device),
             })
         };
+        let length = if self.decomposed {
+            let mut length = branch(1)?;
+            length.head = positive_bias(length.head);
+            Some(length)
+        } else {
+            None
+        };
         Ok(GarFitNet {
             blocks: vec![first, second],
             garfit,
             weight,
             direction: branch(3)?,
-            length: branch(1)?,
+            length,
         })
     }
 }
@@ -195,6 +215,17 @@ impl Correction {
         }
     }
 
+    /// An undecomposed correction `v` (`[N, 3]`) in the same form: `Δ' = ‖v‖`, `δ = v / ‖v‖`,
+    /// so [`Correction::vector`] gives `v` back (the ablation without decomposition).
+    pub fn direct(v: Tensor<2>) -> Self {
+        // The small constant keeps the square root's gradient finite at v = 0.
+        let length = (v.clone().powi_scalar(2).sum_dim(1) + MIN_NORM * MIN_NORM).sqrt();
+        Correction {
+            direction: v / length.clone(),
+            length,
+        }
+    }
+
     /// The correction `Δ = Δ' δ`, `[N, 3]`.
     pub fn vector(&self) -> Tensor<2> {
         self.direction.clone() * self.length.clone()
@@ -212,14 +243,14 @@ impl Correction {
 pub struct GarFitNet {
     /// The two graph-feature GAT blocks.
     pub blocks: Vec<NormedGat>,
-    /// The GarFit parameter MLP's hidden layers.
-    pub garfit: Mlp,
+    /// The GarFit parameter MLP's hidden layers (none without the GarFit branch).
+    pub garfit: Option<Mlp>,
     /// Its last layer: the GarFit correction weight.
-    pub weight: Linear,
+    pub weight: Option<Linear>,
     /// The direction branch.
     pub direction: Branch,
-    /// The length branch.
-    pub length: Branch,
+    /// The length branch (none without decomposition).
+    pub length: Option<Branch>,
 }
 
 impl GarFitNet {
@@ -229,10 +260,10 @@ impl GarFitNet {
     pub fn forward(
         &self,
         x: Tensor<2>,
-        garfit: Tensor<2>,
+        garfit_rows: Tensor<2>,
         graph: &GraphBatch,
     ) -> Result<Correction, ModelError> {
-        let frames = garfit.dims()[0];
+        let frames = garfit_rows.dims()[0];
         if frames != graph.graph_count() {
             return Err(ModelError::mismatch(
                 "GarFit parameter rows (one per frame)",
@@ -244,16 +275,30 @@ impl GarFitNet {
         let a = self.blocks[0].forward(x, adjacency).map_err(nn)?;
         let b = self.blocks[1].forward(a.clone(), adjacency).map_err(nn)?;
         let features = Tensor::cat(vec![a, b], 1);
-        let weight = self
-            .weight
-            .forward(self.garfit.forward(garfit).map_err(nn)?);
-        let per_node = weight.select(0, graph.membership_tensor(&features.device()));
-        let h = features * per_node;
-        Ok(Correction::from_heads(
-            self.direction.forward(h.clone(), graph)?,
-            self.length.forward(h, graph)?,
-        ))
+        let h = match (&self.garfit, &self.weight) {
+            (Some(garfit), Some(weight)) => {
+                let w = weight.forward(garfit.forward(garfit_rows).map_err(nn)?);
+                let membership = graph.membership_tensor(&features.device());
+                features * w.select(0, membership)
+            }
+            _ => features,
+        };
+        let g = self.direction.forward(h.clone(), graph)?;
+        Ok(match &self.length {
+            Some(length) => Correction::from_heads(g, length.forward(h, graph)?),
+            None => Correction::direct(g),
+        })
     }
+}
+
+/// `linear` with its bias set to one: the length head starts at lengths of about one
+/// unit, so the ReLU of eq. 4.9 passes gradients from the first step (G8) instead of
+/// cutting a whole frame to zero.
+pub(crate) fn positive_bias(mut linear: Linear) -> Linear {
+    if let Some(bias) = linear.bias.take() {
+        linear.bias = Some(bias.map(|b| b.ones_like()));
+    }
+    linear
 }
 
 #[cfg(test)]
@@ -281,7 +326,7 @@ mod tests {
         // Two blocks of 64 × 4 + a self stream of 256: 512 each, 1 024 concatenated.
         assert_eq!(cfg.graph_width(), 1024);
         let net = cfg.init(&cpu()).unwrap();
-        assert_eq!(net.weight.weight.dims(), [512, 1024]);
+        assert_eq!(net.weight.as_ref().unwrap().weight.dims(), [512, 1024]);
         // Local: 1 024 + 4 × 128; global: 128.
         assert_eq!(net.direction.multires.output_width(), 1024 + 5 * 128);
         assert!(GarFitNetConfig::new()
@@ -323,10 +368,17 @@ mod tests {
     #[test]
     fn the_loss_trains() {
         let device = cpu_autodiff();
-        let mut net = small().init(&device).unwrap();
+        let net = small().init(&device).unwrap();
         // Lengths start positive, so that the ReLU passes gradients (G8).
-        let bias = net.length.head.bias.take().expect("a bias");
-        net.length.head.bias = Some(bias.map(|b| b.ones_like()));
+        let bias = net
+            .length
+            .as_ref()
+            .unwrap()
+            .head
+            .bias
+            .as_ref()
+            .expect("a bias");
+        assert_eq!(bias.val().min().into_scalar::<f32>(), 1.0);
         // Two frames: batch normalisation of one frame's GarFit vector would centre it to
         // zero (thesis-reference G7), and the weight would get no gradient.
         let g = grid(5, 4, 1.0).graph();
@@ -344,6 +396,8 @@ mod tests {
         let grads = loss.backward();
         let g = net
             .weight
+            .as_ref()
+            .unwrap()
             .weight
             .grad(&grads)
             .expect("the GarFit weight gets a gradient");

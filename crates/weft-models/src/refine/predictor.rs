@@ -47,7 +47,7 @@ fn run_err(path: &Path, message: impl Into<String>) -> ModelError {
 }
 
 /// The parameters of `checkpoint` loaded into `fresh`.
-fn load_record<M: Module>(fresh: M, checkpoint: &Path) -> Result<M, ModelError> {
+pub(crate) fn load_record<M: Module>(fresh: M, checkpoint: &Path) -> Result<M, ModelError> {
     let bytes = weft_mesh::io::read_input(checkpoint).map_err(|source| ModelError::RunRead {
         path: checkpoint.to_path_buf(),
         source,

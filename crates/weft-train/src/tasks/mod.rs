@@ -3,5 +3,6 @@
 //! a module here implementing [`crate::TrainTask`]; the loop, optimisers, checkpoints and
 //! metrics log are shared.
 
+pub mod garfit;
 pub mod multilevel;
 pub mod refine;
