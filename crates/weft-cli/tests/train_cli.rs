@@ -19,6 +19,7 @@ fn dataset(dir: &Path) {
         vertices: 300,
         seed: Some(seed),
         material: None,
+        length: None,
     };
     let m = |kind: &str, seed| MotionSpec {
         kind: Some(kind.into()),

@@ -7,8 +7,12 @@
 //! default in code, so a config file only states what it changes; `weft data generate
 //! --print-config` writes a preset in full for editing.
 //!
-//! Two presets: [`DataConfig::tiny`] (generates in minutes on two cores, for tests and
-//! demos) and [`DataConfig::paper`] (the proportions of seed 000 §4 and supplement §3).
+//! Presets ([`PRESET_NAMES`]): [`DataConfig::tiny`] (generates in minutes on two cores,
+//! for tests and demos), [`DataConfig::small`], [`DataConfig::paper`] (the proportions
+//! of seed 000 §4 and supplement §3), and GarFitNet's fit data (seed 001 ch. 4: one
+//! garment on bodies of different weight, [`DataConfig::garment_body`]):
+//! [`DataConfig::garfit_tiny`] (minutes here) and [`DataConfig::garfit_paper`] (the
+//! thesis's proportions).
 
 use std::path::{Path, PathBuf};
 
@@ -51,6 +55,14 @@ pub struct DataConfig {
     pub beta_components: usize,
     /// Random β components stay within ±this (a truncated normal; seed 000: [−2, 2]).
     pub beta_limit: f64,
+    /// Fit data (GarFitNet, seed 001 ch. 4): the β every garment is made for (missing
+    /// components are 0). Each garment's pattern is built once on this body (the
+    /// `garments/<id>.obj` written), and on each body of a sequence it starts as the
+    /// pattern really sits there (`weft_garment::prepare::fit_onto`: resized, then draped
+    /// with the pattern as rest shape: tight on a fuller body, loose on a slimmer one).
+    /// Absent: every garment is made anew for each body it is simulated on.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub garment_body: Option<Vec<f64>>,
     /// The training split.
     pub train: SplitConfig,
     /// The validation split.
@@ -90,6 +102,24 @@ pub struct GarmentSpec {
     /// Material preset; absent: the config's `material`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
+    /// Skirt or dress length, `mini`, `knee` or `maxi` (short, regular, long); absent:
+    /// the style seed's. Only for skirts and dresses.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length: Option<String>,
+}
+
+/// The skirt and dress lengths a [`GarmentSpec::length`] names.
+pub const LENGTH_NAMES: [&str; 3] = ["mini", "knee", "maxi"];
+
+/// The length called `name` ([`LENGTH_NAMES`]).
+pub fn parse_length(name: &str) -> Option<weft_garment::SkirtLength> {
+    use weft_garment::SkirtLength;
+    match name {
+        "mini" => Some(SkirtLength::Mini),
+        "knee" => Some(SkirtLength::Knee),
+        "maxi" => Some(SkirtLength::Maxi),
+        _ => None,
+    }
 }
 
 /// One motion: procedural (`kind`) or read from a file (`file`), never both.
@@ -138,6 +168,7 @@ impl Default for DataConfig {
             beta_sigma: 1.0,
             beta_components: 2,
             beta_limit: 2.0,
+            garment_body: None,
             train: SplitConfig::default(),
             validation: SplitConfig::default(),
             test: SplitConfig::default(),
@@ -146,7 +177,7 @@ impl Default for DataConfig {
 }
 
 /// Names of the presets, for the CLI's help and errors.
-pub const PRESET_NAMES: [&str; 3] = ["tiny", "small", "paper"];
+pub const PRESET_NAMES: [&str; 5] = ["tiny", "small", "paper", "garfit-tiny", "garfit-paper"];
 
 /// The eight procedural motion kinds, each in the training split of `tiny` and `small`.
 const MOTION_KINDS: [&str; 8] = [
@@ -160,12 +191,25 @@ const MOTION_KINDS: [&str; 8] = [
     "twist",
 ];
 
+/// The five motions of GarFitNet's dataset (seed 001 §4.4.1: dancing, walking, jumping,
+/// raising hands, front kicking).
+const GARFIT_MOTIONS: [&str; 5] = ["walk", "jump", "dance", "raise-arms", "kick"];
+
 fn garment(kind: &str, vertices: usize, seed: u64) -> GarmentSpec {
     GarmentSpec {
         kind: kind.into(),
         vertices,
         seed: Some(seed),
         material: None,
+        length: None,
+    }
+}
+
+/// A skirt or dress of `length` (mini, knee, maxi).
+fn garment_of_length(kind: &str, length: &str, vertices: usize, seed: u64) -> GarmentSpec {
+    GarmentSpec {
+        length: Some(length.into()),
+        ..garment(kind, vertices, seed)
     }
 }
 
@@ -198,6 +242,8 @@ impl DataConfig {
             "tiny" => Ok(Self::tiny()),
             "small" => Ok(Self::small()),
             "paper" => Ok(Self::paper()),
+            "garfit-tiny" => Ok(Self::garfit_tiny()),
+            "garfit-paper" => Ok(Self::garfit_paper()),
             _ => Err(DataError::config(
                 "preset",
                 format!("{name:?}; expected one of {}", PRESET_NAMES.join(", ")),
@@ -385,6 +431,152 @@ impl DataConfig {
         }
     }
 
+    /// GarFitNet's fit data at a size that generates here in minutes (seed 001 ch. 4,
+    /// `weft data generate --preset garfit-tiny`; timings in docs/benchmarks.md,
+    /// "Datasets"). One garment fits bodies of different weight differently, so every
+    /// garment is made once for the zero shape (`garment_body`) and started on each body
+    /// as it really sits there (tight on a heavier body, loose on a thinner one); β₄
+    /// (index 3) is the default body's weight component. Silk, 40 frames.
+    ///
+    /// * train: four garments of about 600 vertices, a skirt at each length (mini, knee,
+    ///   maxi) and a knee dress, on four weights β₄ ∈ {−1.8, −0.6, 0.6, 1.8}, with the
+    ///   thesis's five motions (walk, jump, dance, raise-arms, kick), two per pair: 32
+    ///   sequences.
+    /// * validation: an unseen knee skirt on β₄ = 0.9 with an unseen walk clip.
+    /// * test: three unseen skirts (mini, knee, maxi: new style seeds) on a thin (β₄ =
+    ///   −1.2), regular (0) and fat (1.2) body, each with an unseen walk (another seed
+    ///   and 1.4 m/s) and an unseen jump (another seed, amplitude 1.1): 18 sequences, as
+    ///   the thesis tests three new garments on three new bodies. The regular test body
+    ///   is the body the garments are made for, but no training body.
+    pub fn garfit_tiny() -> Self {
+        let weight = |w: f64| vec![0.0, 0.0, 0.0, w];
+        DataConfig {
+            frames: 40,
+            material: "silk".into(),
+            garment_body: Some(vec![0.0]),
+            train: SplitConfig {
+                betas: [-1.8, -0.6, 0.6, 1.8].map(weight).to_vec(),
+                random_bodies: 0,
+                motions_per_pair: 2,
+                garments: vec![
+                    garment_of_length("skirt", "mini", 600, 1401),
+                    garment_of_length("skirt", "knee", 600, 1402),
+                    garment_of_length("skirt", "maxi", 600, 1403),
+                    garment_of_length("dress", "knee", 600, 1404),
+                ],
+                motions: GARFIT_MOTIONS
+                    .iter()
+                    .zip(1411..)
+                    .map(|(k, seed)| motion(k, seed, None))
+                    .collect(),
+            },
+            validation: SplitConfig {
+                betas: vec![weight(0.9)],
+                random_bodies: 0,
+                motions_per_pair: 0,
+                garments: vec![garment_of_length("skirt", "knee", 600, 1421)],
+                motions: vec![motion("walk", 1422, None)],
+            },
+            test: SplitConfig {
+                betas: [-1.2, 0.0, 1.2].map(weight).to_vec(),
+                random_bodies: 0,
+                motions_per_pair: 0,
+                garments: vec![
+                    garment_of_length("skirt", "mini", 600, 1431),
+                    garment_of_length("skirt", "knee", 600, 1432),
+                    garment_of_length("skirt", "maxi", 600, 1433),
+                ],
+                motions: vec![
+                    MotionSpec {
+                        speed: Some(1.4),
+                        ..motion("walk", 1441, None)
+                    },
+                    MotionSpec {
+                        amplitude: Some(1.1),
+                        ..motion("jump", 1442, None)
+                    },
+                ],
+            },
+            ..DataConfig::default()
+        }
+    }
+
+    /// GarFitNet's dataset at the thesis's proportions (seed 001 §4.4.1; meant for a
+    /// cluster, not generated here): eight body weights (β₄ = ±0.5, ±1, ±1.5, ±2) × six
+    /// garments (a skirt and a dress at each of the three lengths, 3 500–4 000 vertices,
+    /// as the thesis's six garments of 3 178–4 002) = 48 garment–body pairs, every pair
+    /// on the five motions (dance, walk, jump, raise-arms, kick) of 305 frames: 1 525
+    /// poses per pair, the thesis's count. All garments are made for the zero shape and
+    /// fitted onto each body (`garment_body`), silk. Validation: an unseen dress on β₄ =
+    /// 0.75 with an unseen walk; test: three unseen garments (a mini skirt, a knee dress,
+    /// a maxi skirt) on a thin (β₄ = −1.25), regular (0) and fat (1.25) body, with an
+    /// unseen walk and an unseen jump (the thesis's Table 4.2 motion) of 305 frames.
+    pub fn garfit_paper() -> Self {
+        let weight = |w: f64| vec![0.0, 0.0, 0.0, w];
+        let mut garments = Vec::new();
+        for (i, length) in ["mini", "knee", "maxi"].iter().enumerate() {
+            let i = i as u64;
+            garments.push(garment_of_length(
+                "skirt",
+                length,
+                3500 + 200 * i as usize,
+                1500 + 2 * i,
+            ));
+            garments.push(garment_of_length(
+                "dress",
+                length,
+                3600 + 200 * i as usize,
+                1501 + 2 * i,
+            ));
+        }
+        DataConfig {
+            frames: 305,
+            material: "silk".into(),
+            garment_body: Some(vec![0.0]),
+            train: SplitConfig {
+                betas: [-2.0, -1.5, -1.0, -0.5, 0.5, 1.0, 1.5, 2.0]
+                    .map(weight)
+                    .to_vec(),
+                random_bodies: 0,
+                motions_per_pair: 0,
+                garments,
+                motions: GARFIT_MOTIONS
+                    .iter()
+                    .zip(1510..)
+                    .map(|(k, seed)| motion(k, seed, None))
+                    .collect(),
+            },
+            validation: SplitConfig {
+                betas: vec![weight(0.75)],
+                random_bodies: 0,
+                motions_per_pair: 0,
+                garments: vec![garment_of_length("dress", "knee", 3800, 1520)],
+                motions: vec![motion("walk", 1521, None)],
+            },
+            test: SplitConfig {
+                betas: [-1.25, 0.0, 1.25].map(weight).to_vec(),
+                random_bodies: 0,
+                motions_per_pair: 0,
+                garments: vec![
+                    garment_of_length("skirt", "mini", 3400, 1530),
+                    garment_of_length("dress", "knee", 3900, 1531),
+                    garment_of_length("skirt", "maxi", 4000, 1532),
+                ],
+                motions: vec![
+                    MotionSpec {
+                        speed: Some(1.4),
+                        ..motion("walk", 1540, None)
+                    },
+                    MotionSpec {
+                        amplitude: Some(1.1),
+                        ..motion("jump", 1541, None)
+                    },
+                ],
+            },
+            ..DataConfig::default()
+        }
+    }
+
     /// Reads a config file; relative motion file paths are taken from the file's
     /// directory. The result is [`validate`](Self::validate)d.
     pub fn load(path: &Path) -> Result<Self, DataError> {
@@ -504,6 +696,14 @@ impl DataConfig {
                 format!("{}; expected a finite value above 0", self.beta_limit),
             ));
         }
+        if let Some(b) = &self.garment_body {
+            if let Some(j) = b.iter().position(|x| !x.is_finite()) {
+                return Err(DataError::config(
+                    format!("garment_body[{j}]"),
+                    "not a finite number; expected the β the garments are made for",
+                ));
+            }
+        }
         for split in Split::ALL {
             self.validate_split(split)?;
         }
@@ -560,6 +760,26 @@ impl DataConfig {
             }
             if let Some(m) = &g.material {
                 check_material(&format!("{field}.material"), m)?;
+            }
+            if let Some(length) = &g.length {
+                if parse_length(length).is_none() {
+                    return Err(DataError::config(
+                        format!("{field}.length"),
+                        format!(
+                            "{length:?}; expected one of {} (short, regular, long)",
+                            LENGTH_NAMES.join(", ")
+                        ),
+                    ));
+                }
+                if !matches!(g.kind.as_str(), "skirt" | "dress") {
+                    return Err(DataError::config(
+                        format!("{field}.length"),
+                        format!(
+                            "given for a {}; expected only on a skirt or a dress",
+                            g.kind
+                        ),
+                    ));
+                }
             }
         }
         for (i, m) in s.motions.iter().enumerate() {
@@ -684,6 +904,105 @@ mod tests {
         assert!(styles(&small)
             .iter()
             .all(|g| !styles(&DataConfig::tiny()).contains(g)));
+    }
+
+    #[test]
+    fn a_length_is_checked_by_value_and_kind_naming_the_field() {
+        let mut c = DataConfig::garfit_tiny();
+        c.train.garments[1].length = Some("midi".into());
+        let err = c.validate().unwrap_err().to_string();
+        for needle in ["train.garments[1].length", "\"midi\"", "mini, knee, maxi"] {
+            assert!(err.contains(needle), "{needle:?} not in {err}");
+        }
+        let mut c = DataConfig::garfit_tiny();
+        c.test.garments[0].kind = "tshirt".into();
+        let err = c.validate().unwrap_err().to_string();
+        assert!(
+            err.contains("test.garments[0].length") && err.contains("skirt or a dress"),
+            "{err}"
+        );
+        // From TOML, and a config without the field still reads (no length).
+        let text = "[[train.garments]]\nkind = \"dress\"\nvertices = 600\nlength = \"maxi\"\n";
+        let c = DataConfig::from_toml(text).unwrap();
+        assert_eq!(c.train.garments[0].length.as_deref(), Some("maxi"));
+        let c = DataConfig::from_toml("[[train.garments]]\nkind = \"dress\"\nvertices = 600\n")
+            .unwrap();
+        assert_eq!(c.train.garments[0].length, None);
+        assert_eq!(c.garment_body, None);
+        let err = DataConfig::from_toml(
+            "[[train.garments]]\nkind = \"dress\"\nvertices = 600\nlenght = \"mini\"\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("lenght"), "{err}");
+    }
+
+    #[test]
+    fn garment_body_must_be_finite_and_is_not_written_when_absent() {
+        let mut c = DataConfig::garfit_tiny();
+        c.garment_body = Some(vec![0.0, f64::NAN]);
+        let err = c.validate().unwrap_err().to_string();
+        assert!(err.contains("garment_body[1]"), "{err}");
+        assert!(!DataConfig::tiny()
+            .to_toml()
+            .unwrap()
+            .contains("garment_body"));
+        assert!(!DataConfig::tiny().to_toml().unwrap().contains("length"));
+        let text = DataConfig::garfit_tiny().to_toml().unwrap();
+        assert!(text.contains("garment_body = [0.0]"), "{text}");
+    }
+
+    /// garfit-tiny: four garments (three skirt lengths and a dress) made on β = 0, on
+    /// four train weights, five motions two per pair; three unseen skirts on three
+    /// unseen bodies (thin, regular, fat) with two unseen clips in test.
+    #[test]
+    fn garfit_presets_hold_one_garment_on_bodies_of_different_weight() {
+        let c = DataConfig::garfit_tiny();
+        assert_eq!(c.garment_body, Some(vec![0.0]));
+        let sequences = |s: &SplitConfig| {
+            let k = if s.motions_per_pair == 0 {
+                s.motions.len()
+            } else {
+                s.motions_per_pair
+            };
+            s.garments.len() * s.betas.len() * k
+        };
+        assert_eq!(
+            [
+                sequences(&c.train),
+                sequences(&c.validation),
+                sequences(&c.test)
+            ],
+            [32, 1, 18]
+        );
+        let lengths = |s: &SplitConfig| -> Vec<String> {
+            s.garments
+                .iter()
+                .map(|g| format!("{} {}", g.kind, g.length.as_deref().unwrap_or("-")))
+                .collect()
+        };
+        assert_eq!(
+            lengths(&c.train),
+            ["skirt mini", "skirt knee", "skirt maxi", "dress knee"]
+        );
+        assert_eq!(lengths(&c.test), ["skirt mini", "skirt knee", "skirt maxi"]);
+        // Only the weight component varies.
+        for s in [&c.train, &c.validation, &c.test] {
+            assert!(s.betas.iter().all(|b| b.len() == 4 && b[..3] == [0.0; 3]));
+        }
+        let weights: Vec<f64> = c.test.betas.iter().map(|b| b[3]).collect();
+        assert_eq!(weights, [-1.2, 0.0, 1.2]);
+
+        let p = DataConfig::garfit_paper();
+        p.validate().unwrap();
+        assert_eq!(p.train.garments.len() * p.train.betas.len(), 48);
+        assert_eq!(p.train.motions.len() * p.frames, 1525);
+        assert!(p
+            .train
+            .garments
+            .iter()
+            .all(|g| (3500..=4000).contains(&g.vertices)));
+        assert_eq!(p.test.garments.len() * p.test.betas.len(), 9);
     }
 
     #[test]

@@ -23,7 +23,10 @@ pub struct Sequence {
     /// Its manifest record.
     pub record: SequenceRecord,
     /// The garment fitted to this sequence's body, in rest pose: the template whose
-    /// vertices `positions` moves (same vertex order; f32 values widened to f64).
+    /// vertices `positions` moves (same vertex order; f32 values widened to f64). With
+    /// the config's `garment_body` (fit data) it is the pattern fitted onto this body
+    /// (tight on a fuller body, loose on a slimmer one) and the simulator's rest shape
+    /// was the pattern, [`Dataset::garment`].
     pub garment: TriMesh,
     /// UV of each face corner (m), the flat pattern of the seed 000 stretch/shear losses
     /// and of rest frames; one row per face of `garment`.
@@ -147,7 +150,10 @@ impl Dataset {
     /// The garment template fitted to the zero shape (`garments/<id>.obj`). Each
     /// sequence's own fit to its body is [`Sequence::garment`] (same kind, style and
     /// target vertex count; the vertex count can differ by a few percent between
-    /// shapes).
+    /// shapes). With the config's `garment_body` (fit data) it is the garment's pattern,
+    /// made for that body: the rest shape of every sequence of the garment, same vertex
+    /// order and faces as their [`Sequence::garment`], which is the pattern fitted onto
+    /// each body.
     pub fn garment(&self, garment_id: &str) -> Result<TriMesh, DataError> {
         let g = self
             .manifest

@@ -47,8 +47,13 @@ use crate::shard::{self, ShardData};
 
 /// What a simulator needs for one sequence.
 pub struct SimInput<'a> {
-    /// The garment fitted to this body in its rest pose.
+    /// The garment's rest shape: fitted to this body in its rest pose, or with the
+    /// config's `garment_body` the pattern made for that body.
     pub garment: &'a weft_mesh::TriMesh,
+    /// With `garment_body`: where the garment starts on this body in its rest pose (the
+    /// pattern fitted onto it, [`weft_garment::prepare::fit_onto`]); `None`: it starts as
+    /// `garment`.
+    pub start_positions: Option<&'a [[f64; 3]]>,
     /// Its material.
     pub material: &'a Material,
     /// The body model.
@@ -112,6 +117,7 @@ impl SequenceSimulator for Physics {
         let opts = SequenceOptions {
             substeps: input.substeps,
             warmup_frames: input.warmup_frames,
+            start_positions: input.start_positions.map(<[[f64; 3]]>::to_vec),
             ..SequenceOptions::default()
         };
         let stats_json = |s: &[weft_sim::sequence::FrameStats]| {
@@ -272,7 +278,17 @@ pub fn generate(
     }
     manifest.write(&manifest_path)?;
 
-    write_garment_templates(&manifest.garments, &model, out)?;
+    // The body every garment is made for: the zero shape, or the config's
+    // `garment_body` (fit data).
+    let made_for = match &config.garment_body {
+        Some(b) => {
+            let mut b = b.clone();
+            b.resize(model.num_betas(), 0.0);
+            b
+        }
+        None => vec![0.0; model.num_betas()],
+    };
+    write_garment_templates(&manifest.garments, &model, &made_for, out)?;
 
     let pending: Vec<usize> = manifest
         .sequences
@@ -312,6 +328,11 @@ pub fn generate(
             ((*id).clone(), fit)
         })
         .collect();
+
+    let fitted = match &config.garment_body {
+        Some(_) => fit_patterns(&manifest, &pending, &model, &made_for, &fits, progress)?,
+        None => Fitted::default(),
+    };
 
     // Longest first, so the last tasks of the parallel loop are short.
     let mut order = pending.clone();
@@ -353,7 +374,8 @@ pub fn generate(
         .map(|&i| {
             let record = &snapshot.sequences[i];
             let outcome = run_sequence(
-                record, &snapshot, config, &model, &motions, &fits, out, simulator, progress,
+                record, &snapshot, config, &model, &motions, &fits, &fitted, out, simulator,
+                progress,
             )?;
             let mut guard = lock(&shared);
             let (manifest, report) = &mut *guard;
@@ -548,13 +570,24 @@ fn remove_temp_files(path: &Path) -> Result<(), DataError> {
     Ok(())
 }
 
-/// A garment's template on the zero shape.
+/// A garment's template on the body `fit`.
 fn build_garment(g: &GarmentRecord, fit: &FitBody) -> Result<Garment, DataError> {
     let kind = GarmentKind::parse(&g.kind).map_err(|source| DataError::Garment {
         id: g.id.clone(),
         source: Box::new(source),
     })?;
-    let style = Style::from_seed(kind, g.seed);
+    let mut style = Style::from_seed(kind, g.seed);
+    if let Some(name) = &g.length {
+        style.length = crate::config::parse_length(name).ok_or_else(|| {
+            DataError::config(
+                format!("garment {}.length", g.id),
+                format!(
+                    "{name:?}; expected one of {}",
+                    crate::config::LENGTH_NAMES.join(", ")
+                ),
+            )
+        })?;
+    }
     fit.generate(kind, &style, g.target_vertices)
         .map_err(|source| DataError::Garment {
             id: g.id.clone(),
@@ -562,10 +595,12 @@ fn build_garment(g: &GarmentRecord, fit: &FitBody) -> Result<Garment, DataError>
         })
 }
 
-/// Writes `garments/<id>.obj` (fitted to β = 0) for garments that have none yet.
+/// Writes `garments/<id>.obj` (fitted to the body at `betas`: β = 0, or the config's
+/// `garment_body`) for garments that have none yet.
 fn write_garment_templates(
     garments: &[GarmentRecord],
     model: &BodyModel,
+    betas: &[f64],
     out: &Path,
 ) -> Result<(), DataError> {
     let missing: Vec<&GarmentRecord> = garments
@@ -575,11 +610,9 @@ fn write_garment_templates(
     if missing.is_empty() {
         return Ok(());
     }
-    let zero = FitBody::new(model, &vec![0.0; model.num_betas()]).map_err(|source| {
-        DataError::Garment {
-            id: "(zero-shape fit)".into(),
-            source: Box::new(source),
-        }
+    let zero = FitBody::new(model, betas).map_err(|source| DataError::Garment {
+        id: "(template body fit)".into(),
+        source: Box::new(source),
     })?;
     missing.par_iter().try_for_each(|g| {
         let garment = build_garment(g, &zero)?;
@@ -589,6 +622,123 @@ fn write_garment_templates(
                 source: Box::new(source),
             }
         })
+    })
+}
+
+/// With `garment_body`: each garment's pattern (built once on that body) and, per
+/// garment–body pair, the pattern fitted onto that body in its rest pose. A garment or
+/// pair that could not be made holds the reason, which fails its sequences.
+#[derive(Default)]
+struct Fitted {
+    patterns: BTreeMap<String, Result<Garment, String>>,
+    pairs: BTreeMap<(String, String), FitResult>,
+}
+
+/// A garment fitted onto a body (rest-pose positions), or why it could not be.
+type FitResult = Result<Vec<[f64; 3]>, String>;
+
+/// Builds the patterns of the garments of `pending` sequences on the body at `made_for`
+/// and fits each garment–body pair once ([`weft_garment::prepare::fit_onto`]), in
+/// parallel.
+fn fit_patterns(
+    manifest: &Manifest,
+    pending: &[usize],
+    model: &BodyModel,
+    made_for: &[f64],
+    fits: &BTreeMap<String, Result<FitBody, String>>,
+    progress: &dyn Progress,
+) -> Result<Fitted, DataError> {
+    use weft_garment::prepare::{fit_onto, FitOntoOptions};
+    let pairs: Vec<(String, String)> = {
+        let mut p: Vec<(String, String)> = pending
+            .iter()
+            .map(|&i| {
+                let s = &manifest.sequences[i];
+                (s.garment_id.clone(), s.body_id.clone())
+            })
+            .collect();
+        p.sort();
+        p.dedup();
+        p
+    };
+    if pairs.is_empty() {
+        return Ok(Fitted::default());
+    }
+    let reference = FitBody::new(model, made_for).map_err(|source| DataError::Garment {
+        id: "(garment_body fit)".into(),
+        source: Box::new(source),
+    })?;
+    let mut garment_ids: Vec<&String> = pairs.iter().map(|(g, _)| g).collect();
+    garment_ids.dedup();
+    let started = Instant::now();
+    progress.message(&format!(
+        "garment_body: fitting {} garments onto their bodies ({} garment-body pairs)",
+        garment_ids.len(),
+        pairs.len()
+    ));
+    let patterns: BTreeMap<String, Result<Garment, String>> = garment_ids
+        .par_iter()
+        .map(|id| {
+            let pattern = match manifest.garments.iter().find(|g| &g.id == *id) {
+                Some(g) => build_garment(g, &reference).map_err(|e| error_chain(&e)),
+                None => Err(format!("garment {id} is not listed")),
+            };
+            ((*id).clone(), pattern)
+        })
+        .collect();
+    let fitted: BTreeMap<(String, String), FitResult> = pairs
+        .par_iter()
+        .map(|(g, b)| {
+            let fit = || -> FitResult {
+                let pattern = match patterns.get(g) {
+                    Some(Ok(p)) => p,
+                    Some(Err(e)) => return Err(format!("making garment {g}: {e}")),
+                    None => return Err(format!("garment {g} was not made")),
+                };
+                let body = match fits.get(b) {
+                    Some(Ok(f)) => f,
+                    Some(Err(e)) => return Err(format!("fitting to body {b}: {e}")),
+                    None => return Err(format!("body {b} was not fitted")),
+                };
+                let material = manifest
+                    .garments
+                    .iter()
+                    .find(|r| &r.id == g)
+                    .map(|r| Material::preset(&r.material))
+                    .unwrap_or_else(|| Ok(Material::silk()))
+                    .map_err(|e| e.to_string())?;
+                fit_onto(
+                    &pattern.mesh,
+                    &reference,
+                    body,
+                    &material,
+                    &FitOntoOptions::default(),
+                )
+                .map(|(positions, _)| positions)
+                .map_err(|e| {
+                    format!(
+                        "fitting garment {g} (made for garment_body) onto body {b}: {}",
+                        error_chain(&e)
+                    )
+                })
+            };
+            ((g.clone(), b.clone()), fit())
+        })
+        .collect();
+    let failed = fitted.values().filter(|r| r.is_err()).count();
+    progress.message(&format!(
+        "garment_body: {} pairs fitted in {:.1} s{}",
+        pairs.len() - failed,
+        started.elapsed().as_secs_f64(),
+        if failed > 0 {
+            format!(", {failed} failed (their sequences fail)")
+        } else {
+            String::new()
+        }
+    ));
+    Ok(Fitted {
+        patterns,
+        pairs: fitted,
     })
 }
 
@@ -716,6 +866,7 @@ fn run_sequence(
     model: &BodyModel,
     motions: &BTreeMap<MotionKey, Motion>,
     fits: &BTreeMap<String, Result<FitBody, String>>,
+    fitted: &Fitted,
     out: &Path,
     simulator: &dyn SequenceSimulator,
     progress: &dyn Progress,
@@ -742,9 +893,29 @@ fn run_sequence(
     let Some(g) = manifest.garments.iter().find(|g| g.id == r.garment_id) else {
         return fail(r, format!("garment {} is not listed", record.garment_id));
     };
-    let garment = match build_garment(g, fit) {
-        Ok(g) => g,
-        Err(e) => return fail(r, error_chain(&e)),
+    // With `garment_body`: the pattern made for that body, started where it sits on
+    // this one; else the garment made anew for this body.
+    let made;
+    let (garment, start) = if config.garment_body.is_some() {
+        let pattern = match fitted.patterns.get(&g.id) {
+            Some(Ok(p)) => p,
+            Some(Err(e)) => return fail(r, format!("making garment {}: {e}", g.id)),
+            None => return fail(r, format!("garment {} was not made", g.id)),
+        };
+        match fitted.pairs.get(&(g.id.clone(), r.body_id.clone())) {
+            Some(Ok(start)) => (pattern, Some(start.as_slice())),
+            Some(Err(e)) => return fail(r, e.clone()),
+            None => {
+                let why = format!("garment {} was not fitted onto body {}", g.id, r.body_id);
+                return fail(r, why);
+            }
+        }
+    } else {
+        made = match build_garment(g, fit) {
+            Ok(g) => g,
+            Err(e) => return fail(r, error_chain(&e)),
+        };
+        (&made, None)
     };
     let material = match Material::preset(&r.material) {
         Ok(m) => m,
@@ -753,6 +924,7 @@ fn run_sequence(
     let betas = betas_f64(&r.betas);
     let input = SimInput {
         garment: &garment.mesh,
+        start_positions: start,
         material: &material,
         body: model,
         betas: &betas,
@@ -801,9 +973,11 @@ fn run_sequence(
             poses: motion.poses()[..t].to_vec(),
             trans: motion.trans()[..t].to_vec(),
             betas: r.betas.clone(),
-            rest_positions: garment
-                .mesh
-                .positions
+            // The garment on this body in its rest pose: as made for it, or the pattern
+            // fitted onto it (what fit data's α, body association and joint distances
+            // are computed from).
+            rest_positions: start
+                .unwrap_or(&garment.mesh.positions)
                 .iter()
                 .map(|p| p.map(|c| c as f32))
                 .collect(),
@@ -825,4 +999,112 @@ fn run_sequence(
         record: r,
         frames: t,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A simulator that must not be reached.
+    struct Unreachable;
+
+    impl SequenceSimulator for Unreachable {
+        fn simulate(&self, _: &SimInput<'_>, _: &mut dyn FnMut()) -> Result<SimOutcome, String> {
+            Err("the simulator was called for a sequence whose fit failed".into())
+        }
+    }
+
+    /// With `garment_body`, a garment–body pair whose fit failed (or is missing) makes
+    /// its sequence `failed` with the reason, before any simulation and without a
+    /// panic; so does a garment whose pattern could not be made.
+    #[test]
+    fn a_failed_fit_fails_its_sequences_with_the_reason() {
+        let model = weft_body::default_body().unwrap();
+        let mut config = DataConfig::garfit_tiny();
+        for m in [
+            &mut config.train.motions,
+            &mut config.validation.motions,
+            &mut config.test.motions,
+        ] {
+            for spec in m.iter_mut() {
+                spec.frames = Some(2);
+            }
+        }
+        let manifest = plan(&config, model.num_betas(), "b").unwrap();
+        let dir = std::env::temp_dir().join(format!("weft-data-fit-fail-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("shards")).unwrap();
+        std::fs::create_dir_all(dir.join("stats")).unwrap();
+        let record = &manifest.sequences[0];
+        let owns = |i: usize| i == 0;
+        let motions = build_motions(&manifest, &owns, config.fps, &model, &dir).unwrap();
+        let body = manifest
+            .bodies
+            .iter()
+            .find(|b| b.id == record.body_id)
+            .unwrap();
+        let mut fits = BTreeMap::new();
+        fits.insert(
+            body.id.clone(),
+            FitBody::new(&model, &betas_f64(&body.betas)).map_err(|e| error_chain(&e)),
+        );
+        let garment = manifest
+            .garments
+            .iter()
+            .find(|g| g.id == record.garment_id)
+            .unwrap();
+        let reference = FitBody::new(&model, &[0.0]).unwrap();
+        let pattern = build_garment(garment, &reference).map_err(|e| error_chain(&e));
+        let key = (record.garment_id.clone(), record.body_id.clone());
+        let run = |fitted: &Fitted| {
+            run_sequence(
+                record,
+                &manifest,
+                &config,
+                &model,
+                &motions,
+                &fits,
+                fitted,
+                &dir,
+                &Unreachable,
+                &Silent,
+            )
+            .unwrap()
+            .record
+        };
+        let mut fitted = Fitted::default();
+        fitted
+            .patterns
+            .insert(garment.id.clone(), pattern.map_err(|e| e.to_string()));
+        fitted
+            .pairs
+            .insert(key.clone(), Err("drape frame 3: diverged".into()));
+        let r = run(&fitted);
+        assert_eq!(r.status, Status::Failed);
+        assert_eq!(r.message.as_deref(), Some("drape frame 3: diverged"));
+        assert_eq!((r.frames, r.sha256.as_deref()), (0, None));
+
+        fitted.pairs.clear();
+        let r = run(&fitted);
+        assert_eq!(r.status, Status::Failed);
+        assert!(
+            r.message
+                .as_deref()
+                .unwrap_or("")
+                .contains("was not fitted onto body"),
+            "{r:?}"
+        );
+
+        fitted
+            .patterns
+            .insert(garment.id.clone(), Err("no measurements".into()));
+        fitted.pairs.insert(key, Ok(vec![[0.0; 3]]));
+        let r = run(&fitted);
+        assert_eq!(r.status, Status::Failed);
+        let why = r.message.unwrap_or_default();
+        assert!(
+            why.contains("making garment") && why.contains("no measurements"),
+            "{why}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

@@ -589,6 +589,7 @@ impl Ids {
             target_vertices: 0,
             seed: 0,
             material: g.material.clone(),
+            length: None,
             file: garment_path(&g.id),
         });
         self.garments.insert(g.id.clone(), g.id.clone());

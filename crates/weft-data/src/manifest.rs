@@ -14,6 +14,11 @@
 //! DIR/shards/<sequence_id>.safetensors one shard per sequence (see crate::shard)
 //! DIR/stats/<sequence_id>.json         the simulator's per-frame statistics
 //! ```
+//!
+//! With the config's `garment_body` (fit data, GarFitNet) `garments/<id>.obj` is the
+//! garment's pattern, made for that body (every sequence's rest shape), and each shard's
+//! `rest_positions` the pattern fitted onto the sequence's body (see [`crate::shard`]):
+//! what α, the garment–body association and the joint distances are computed from.
 
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
@@ -72,7 +77,12 @@ pub struct GarmentRecord {
     pub seed: u64,
     /// Material preset name.
     pub material: String,
-    /// The template fitted to the zero shape, relative to the dataset directory.
+    /// Skirt or dress length (mini, knee, maxi) overriding the style seed's; absent in
+    /// manifests of garments that name none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length: Option<String>,
+    /// The template, relative to the dataset directory: the garment fitted to the zero
+    /// shape, or with the config's `garment_body` its pattern, made for that body.
     pub file: String,
 }
 

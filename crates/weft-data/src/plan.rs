@@ -119,9 +119,23 @@ pub fn plan(
                     .material
                     .clone()
                     .unwrap_or_else(|| config.material.clone()),
+                length: spec.length.clone(),
             });
         }
         let b0 = bodies.len();
+        if split_index == 0 {
+            if let Some(b) = &config.garment_body {
+                if b.len() > num_betas {
+                    return Err(DataError::config(
+                        "garment_body",
+                        format!(
+                            "{} values; the body model has {num_betas} shape components",
+                            b.len()
+                        ),
+                    ));
+                }
+            }
+        }
         let mut shapes: Vec<Vec<f32>> = Vec::new();
         for (i, b) in sc.betas.iter().enumerate() {
             if b.len() > num_betas {
@@ -293,10 +307,17 @@ pub fn check_no_overlap(manifest: &Manifest) -> Result<(), DataError> {
         .map(|g| {
             (
                 g.split,
-                (g.kind.clone(), g.target_vertices, g.seed),
+                (g.kind.clone(), g.target_vertices, g.seed, g.length.clone()),
                 format!(
-                    "garment {} ({}, {} vertices, seed {})",
-                    g.id, g.kind, g.target_vertices, g.seed
+                    "garment {} ({}, {} vertices, seed {}{})",
+                    g.id,
+                    g.kind,
+                    g.target_vertices,
+                    g.seed,
+                    g.length
+                        .as_deref()
+                        .map(|l| format!(", {l}"))
+                        .unwrap_or_default()
                 ),
             )
         })
@@ -450,6 +471,43 @@ mod tests {
         }
         c.seed = 1;
         assert_ne!(plan(&c, 10, "b").unwrap().bodies, a.bodies);
+    }
+
+    /// The garfit presets pass the no-overlap rule (the regular test body is the body
+    /// the garments are made for, but no training body); a garment differing only in
+    /// length is another garment; a too long `garment_body` is refused naming it.
+    #[test]
+    fn garfit_plans_keep_the_splits_apart() {
+        for c in [DataConfig::garfit_tiny(), DataConfig::garfit_paper()] {
+            let m = plan(&c, 10, "b").unwrap();
+            m.validate(std::path::Path::new("plan")).unwrap();
+            assert!(m.garments.iter().all(|g| g.length.is_some()));
+        }
+        let m = plan(&DataConfig::garfit_tiny(), 10, "b").unwrap();
+        let count = |s: Split| m.sequences_in(s).count();
+        assert_eq!(
+            [
+                count(Split::Train),
+                count(Split::Validation),
+                count(Split::Test)
+            ],
+            [32, 1, 18]
+        );
+
+        let mut c = DataConfig::garfit_tiny();
+        c.test.garments[0] = c.train.garments[0].clone();
+        let err = plan(&c, 10, "b").unwrap_err().to_string();
+        assert!(err.contains("garment") && err.contains("mini"), "{err}");
+        c.test.garments[0].length = Some("maxi".into());
+        plan(&c, 10, "b").unwrap();
+
+        let mut c = DataConfig::garfit_tiny();
+        c.garment_body = Some(vec![0.0; 11]);
+        let err = plan(&c, 10, "b").unwrap_err().to_string();
+        assert!(
+            err.contains("garment_body") && err.contains("11 values"),
+            "{err}"
+        );
     }
 
     #[test]

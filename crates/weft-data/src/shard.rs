@@ -12,6 +12,16 @@
 //! | `faces`          | u32   | [F, 3]    | its triangles                                 |
 //! | `corner_uvs`     | f32   | [F, 3, 2] | UV of each face corner (m): the flat pattern  |
 //!
+//! `rest_positions`: the garment on this sequence's body in its rest pose, where
+//! frame 0's warm-up starts. Without the config's `garment_body` it is the garment made
+//! for this body (also its rest shape). With `garment_body` (fit data, GarFitNet) it is
+//! the garment's pattern, made for that body, fitted onto this one
+//! (`weft_garment::prepare::fit_onto`: stretched tight on a fuller body, loose on a
+//! slimmer one), while the simulator's rest shape stays the pattern
+//! (`garments/<id>.obj`, same vertex order and faces). That fitted garment is what fit
+//! data's fit parameter α, garment–body association and joint distances are computed
+//! from.
+//!
 //! The header's `__metadata__` holds one key, `sequence`, the sequence id, so a shard
 //! moved out of its directory still says what it is. safetensors orders tensors by
 //! dtype and name, and one metadata key serialises one way, so the same data always
@@ -49,7 +59,8 @@ pub struct ShardData {
     pub trans: Vec<[f32; 3]>,
     /// `[B]` shape β.
     pub betas: Vec<f32>,
-    /// `[N]` rest positions of the fitted garment.
+    /// `[N]` the garment on this body in its rest pose: made for it, or with
+    /// `garment_body` the pattern fitted onto it (module docs).
     pub rest_positions: Vec<[f32; 3]>,
     /// `[F]` triangles.
     pub faces: Vec<[u32; 3]>,

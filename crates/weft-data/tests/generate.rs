@@ -92,6 +92,7 @@ fn small_config() -> DataConfig {
         vertices: 300,
         seed: Some(seed),
         material: None,
+        length: None,
     };
     let m = |kind: &str, seed| MotionSpec {
         kind: Some(kind.into()),
@@ -653,4 +654,148 @@ fn file_motions_are_resampled_and_windowed() {
         "{message}"
     );
     assert!(!out.exists());
+}
+
+/// Records what the simulator was given with `garment_body`: per body (β₄), the rest
+/// shape and the start positions; frames are the start moved by the root.
+struct StartSim {
+    seen: Mutex<Vec<Given>>,
+}
+
+/// β₄, the rest shape and the start positions a simulator was given.
+type Given = (f64, Vec<[f64; 3]>, Option<Vec<[f64; 3]>>);
+
+impl SequenceSimulator for StartSim {
+    fn simulate(
+        &self,
+        input: &SimInput<'_>,
+        on_frame: &mut dyn FnMut(),
+    ) -> Result<SimOutcome, String> {
+        self.seen.lock().unwrap().push((
+            input.betas[3],
+            input.garment.positions.clone(),
+            input.start_positions.map(<[[f64; 3]]>::to_vec),
+        ));
+        let start = input.start_positions.unwrap_or(&input.garment.positions);
+        let mut frames = Vec::new();
+        for t in 0..input.motion.frame_count() {
+            let tr = input.motion.trans()[t];
+            frames.push(
+                start
+                    .iter()
+                    .map(|p| std::array::from_fn(|k| (p[k] + f64::from(tr[k])) as f32))
+                    .collect(),
+            );
+            on_frame();
+        }
+        Ok(SimOutcome::Finished {
+            frames,
+            stats: serde_json::Value::Array(vec![]),
+        })
+    }
+}
+
+/// Issue 14, fit data: with `garment_body` every garment is one pattern (the template
+/// written, made on that body), simulated on each body as its rest shape from the
+/// pattern fitted onto that body (`fit_onto`, once per garment–body pair, not per
+/// sequence); the shard's rest positions are that fitted garment, which differs from
+/// body to body, and the same config gives the same bytes.
+#[test]
+fn garment_body_starts_one_pattern_fitted_onto_each_body() {
+    let g = |kind: &str, length: &str, seed| GarmentSpec {
+        kind: kind.into(),
+        vertices: 300,
+        seed: Some(seed),
+        material: None,
+        length: Some(length.into()),
+    };
+    let m = |kind: &str, seed| MotionSpec {
+        kind: Some(kind.into()),
+        seed: Some(seed),
+        frames: Some(2),
+        ..MotionSpec::default()
+    };
+    let weight = |w: f64| vec![0.0, 0.0, 0.0, w];
+    let mut c = DataConfig::garfit_tiny();
+    c.train.garments = vec![g("skirt", "knee", 1)];
+    c.train.betas = vec![weight(1.5), weight(-1.5)];
+    c.train.motions = vec![m("walk", 1), m("jump", 2)];
+    c.train.motions_per_pair = 0;
+    c.validation.garments = vec![g("skirt", "mini", 2)];
+    c.validation.betas = vec![weight(0.5)];
+    c.validation.motions = vec![m("kick", 3)];
+    c.test.garments = vec![g("dress", "maxi", 3)];
+    c.test.betas = vec![weight(0.0)];
+    c.test.motions = vec![m("dance", 4)];
+
+    let dir = scratch("garment-body");
+    let sim = StartSim {
+        seen: Mutex::new(Vec::new()),
+    };
+    let messages = Messages::default();
+    let report = generate(&c, &dir, &GenerateOptions::default(), &sim, &messages).unwrap();
+    assert_eq!((report.done, report.failed.len()), (6, 0), "{report:?}");
+    let messages = messages.0.into_inner().unwrap();
+    assert!(
+        messages
+            .iter()
+            .any(|t| t.contains("(4 garment-body pairs)")),
+        "{messages:?}"
+    );
+
+    let seen = sim.seen.into_inner().unwrap();
+    assert_eq!(seen.len(), 6);
+    assert!(seen.iter().all(|(_, _, start)| start.is_some()));
+    let ds = Dataset::open(&dir).unwrap();
+    let pattern = ds.garment("g000-skirt").unwrap();
+    let mut fitted = Vec::new();
+    for r in ds.records_in(Split::Train) {
+        let s = ds.load(r).unwrap();
+        let w = f64::from(r.betas[3]);
+        let (_, rest, start) = seen.iter().find(|(b, _, _)| *b == w).unwrap();
+        // The rest shape given to the simulator is the template written (f32 in OBJ).
+        assert_eq!(rest.len(), pattern.vertex_count());
+        assert!(rest
+            .iter()
+            .zip(&pattern.positions)
+            .all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-5)));
+        // The shard's rest positions are the fitted start, not the pattern.
+        let start = start.as_ref().unwrap();
+        assert!(s
+            .garment
+            .positions
+            .iter()
+            .zip(start)
+            .all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-5)));
+        fitted.push((w, s.garment.positions.clone()));
+    }
+    let moved = |a: &[[f64; 3]], b: &[[f64; 3]]| {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| weft_mesh::vec3::dist(*p, *q))
+            .sum::<f64>()
+            / a.len() as f64
+    };
+    let fat = &fitted.iter().find(|(w, _)| *w > 0.0).unwrap().1;
+    let thin = &fitted.iter().find(|(w, _)| *w < 0.0).unwrap().1;
+    assert!(moved(fat, &pattern.positions) > 0.005);
+    assert!(moved(thin, &pattern.positions) > 0.005);
+    assert!(moved(fat, thin) > 0.01);
+
+    let again = scratch("garment-body-again");
+    generate(
+        &c,
+        &again,
+        &GenerateOptions::default(),
+        &StartSim {
+            seen: Mutex::new(Vec::new()),
+        },
+        &Silent,
+    )
+    .unwrap();
+    assert!(files(&dir) == files(&again), "not byte-identical");
+    assert_eq!(
+        std::fs::read(dir.join("manifest.json")).unwrap(),
+        std::fs::read(again.join("manifest.json")).unwrap()
+    );
 }

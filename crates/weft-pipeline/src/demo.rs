@@ -84,6 +84,7 @@ pub fn quick_data_config() -> DataConfig {
         vertices,
         seed: Some(seed),
         material: None,
+        length: None,
     };
     let m = |kind: &str, seed: u64| DataMotion {
         kind: Some(kind.into()),

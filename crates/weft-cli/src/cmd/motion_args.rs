@@ -296,6 +296,7 @@ mod tests {
                     vertices: 300,
                     seed: Some(seed),
                     material: None,
+                    length: None,
                 }],
                 motions: vec![DataMotion {
                     kind: Some(kind.into()),
@@ -312,6 +313,7 @@ mod tests {
                     vertices: 300,
                     seed: Some(1),
                     material: None,
+                    length: None,
                 }],
                 motions: vec![DataMotion {
                     file: Some(file.clone()),
