@@ -57,6 +57,7 @@ fn small_config() -> DataConfig {
         vertices: 300,
         seed: Some(seed),
         material: None,
+        length: None,
     };
     let m = |kind: &str, seed| MotionSpec {
         kind: Some(kind.into()),
@@ -78,7 +79,7 @@ fn small_config() -> DataConfig {
 #[test]
 fn print_config_writes_a_preset_that_reads_back() {
     let dir = scratch("print");
-    for preset in ["tiny", "small", "paper"] {
+    for preset in ["tiny", "small", "paper", "garfit-tiny", "garfit-paper"] {
         let o = weft(&["data", "generate", "--preset", preset, "--print-config"]);
         assert!(o.status.success(), "{}", stderr(&o));
         let text = stdout(&o);
@@ -254,7 +255,7 @@ fn bad_input_is_one_line_naming_the_problem() {
                     "--out".into(),
                     out.clone(),
                 ],
-                "tiny, small, paper",
+                "tiny, small, paper, garfit-tiny, garfit-paper",
             ),
             (
                 vec![

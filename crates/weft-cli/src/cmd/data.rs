@@ -68,7 +68,9 @@ pub struct ImportArgs {
 #[derive(Args)]
 pub struct GenerateArgs {
     /// A built-in config: tiny (a minute on a laptop), small (7× tiny's training data,
-    /// minutes) or paper (seed 000's proportions).
+    /// minutes), paper (seed 000's proportions), or GarFitNet's fit data (one garment on
+    /// bodies of different weight): garfit-tiny (minutes) and garfit-paper (seed 001
+    /// ch. 4's proportions).
     #[arg(long, conflicts_with = "config")]
     preset: Option<String>,
     /// A dataset config (TOML); see `--print-config` for every field.
