@@ -22,7 +22,7 @@ use weft_render::{Colormap, Report};
 use crate::error::EvalError;
 use crate::metrics::{vertex_errors_mm, FrameMetrics, GarmentTopology};
 use crate::pictures::{comparison_sheet, heat_map, per_frame_plot, MethodFrames, ERROR_LABEL};
-use crate::report::{write_text, EvalReport, MethodResult, REPORT_VERSION};
+use crate::report::{write_text, EvalReport, MethodResult, SequenceScore, REPORT_VERSION};
 
 /// What to evaluate and how much.
 #[derive(Clone, Debug)]
@@ -176,6 +176,7 @@ pub struct Evaluator<'a> {
     example: Option<Example>,
     frames: u64,
     sequences: usize,
+    per_sequence: Vec<SequenceScore>,
 }
 
 impl<'a> Evaluator<'a> {
@@ -208,6 +209,7 @@ impl<'a> Evaluator<'a> {
             example: None,
             frames: 0,
             sequences: 0,
+            per_sequence: Vec::new(),
         })
     }
 
@@ -277,6 +279,15 @@ impl<'a> Evaluator<'a> {
             .iter()
             .map(|p| vertex_mean(p, &seq.positions))
             .collect::<Result<Vec<f64>, _>>()?;
+        self.per_sequence.push(SequenceScore {
+            id: seq.record.id.clone(),
+            garment: seq.record.garment_id.clone(),
+            body: seq.record.body_id.clone(),
+            motion: seq.record.motion_id.clone(),
+            betas: seq.record.betas.clone(),
+            frames: seq.positions.len(),
+            e_verts_mm: means.clone(),
+        });
         if self.example.is_none() {
             if let Some(bodies) = bodies {
                 self.example = Some(Example {
@@ -314,6 +325,7 @@ impl<'a> Evaluator<'a> {
             sequences: self.sequences,
             frames: self.frames,
             methods,
+            per_sequence: self.per_sequence,
             command: self.opts.command.clone(),
         };
         Evaluation {

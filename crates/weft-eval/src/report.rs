@@ -56,8 +56,32 @@ pub struct EvalReport {
     pub frames: u64,
     /// The evaluated run's model first, then the other methods in the order given.
     pub methods: Vec<MethodResult>,
+    /// Each sequence's mean vertex error per method, so tables can group them (by body
+    /// shape, garment, motion: seed 001 Tables 4.1–4.2). Absent in reports written
+    /// before it was kept.
+    #[serde(default)]
+    pub per_sequence: Vec<SequenceScore>,
     /// The command that reproduces this report.
     pub command: String,
+}
+
+/// One sequence of an [`EvalReport`]: what it is and each method's mean vertex error.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SequenceScore {
+    /// The sequence id.
+    pub id: String,
+    /// Its garment's id.
+    pub garment: String,
+    /// Its body's id.
+    pub body: String,
+    /// Its motion's id.
+    pub motion: String,
+    /// Its body's shape.
+    pub betas: Vec<f32>,
+    /// Frames scored.
+    pub frames: usize,
+    /// Mean vertex error (mm) of each method, in the order of [`EvalReport::methods`].
+    pub e_verts_mm: Vec<f64>,
 }
 
 /// `1 − E_model / E_base` of the mean vertex errors: the share by which `model` is below
@@ -434,6 +458,7 @@ pub(crate) mod tests {
             split: "test".into(),
             sequences: 1,
             frames: 1,
+            per_sequence: Vec::new(),
             methods: vec![
                 MethodResult {
                     name: label.into(),

@@ -21,20 +21,27 @@ use super::network::{positive_bias, Correction};
 use crate::error::ModelError;
 use crate::refine::{nn_error as nn, output_transform};
 
+/// A garment vertex farther than this from every body vertex (rest pose, m) means the
+/// garment is not dressed on this body: its association would be meaningless.
+pub const MAX_ASSOCIATION_DISTANCE: f64 = 0.5;
+
 /// For every garment vertex (rest pose), its nearest body vertex (rest pose, the body the
-/// garment was made for).
+/// garment sits on). Errors: a non-finite garment vertex, or one farther than
+/// [`MAX_ASSOCIATION_DISTANCE`] from the body (a garment with no body region under it).
 pub fn association(body: &[[f64; 3]], garment: &[[f64; 3]]) -> Result<Vec<u32>, ModelError> {
     let tree = VertexTree::new(body).map_err(|e| ModelError::Body(e.to_string()))?;
     garment
         .iter()
         .enumerate()
-        .map(|(i, &p)| {
-            tree.nearest(p)
-                .map(|(v, _)| v)
-                .ok_or(ModelError::NonFinite {
-                    what: "garment vertex",
-                    index: i,
-                })
+        .map(|(i, &p)| match tree.nearest(p) {
+            None => Err(ModelError::NonFinite {
+                what: "garment vertex",
+                index: i,
+            }),
+            Some((_, d)) if d > MAX_ASSOCIATION_DISTANCE => Err(ModelError::Garment(format!(
+                "garment vertex {i} is {d:.2} m from the nearest body vertex (at most {MAX_ASSOCIATION_DISTANCE} m expected): the garment is not dressed on this body in its rest pose"
+            ))),
+            Some((v, _)) => Ok(v),
         })
         .collect()
 }

@@ -332,5 +332,12 @@ mod tests {
         assert!(e.to_string().contains("garment vertex"), "{e}");
         let e = FitPair::new(&body, &[0.0], pair.garment.clone(), vec![f64::NAN]).unwrap_err();
         assert!(e.to_string().contains("α"), "{e}");
+        // A garment with no body region under it (moved 2 m to the side).
+        let mut away = pair.garment.clone();
+        for p in &mut away.positions {
+            p[0] += 2.0;
+        }
+        let e = FitPair::new(&body, &[0.0], away, vec![0.0; 3]).unwrap_err();
+        assert!(e.to_string().contains("not dressed on this body"), "{e}");
     }
 }
