@@ -10,6 +10,8 @@
 //! - [`densegats`]: DenseGATs per stage on a character, with the linear maps' floor;
 //! - [`multiresgnet`]: MultiResGNet per stage on the same character (`refine`: what the
 //!   two share);
+//! - [`garfitnet`]: GarFitNet per stage (posed body, coarse regressor, refinement) on a
+//!   garment;
 //! - [`simulate`]: the cloth simulator on a garment and a motion, cost and quality.
 //!
 //! Figures are wall-clock times on the calling thread pool (rayon's, sized by
@@ -17,6 +19,7 @@
 
 pub mod densegats;
 pub mod error;
+pub mod garfitnet;
 pub mod gat;
 pub mod multilevel;
 pub mod multiresgnet;

@@ -8,6 +8,7 @@ use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use weft_bench::densegats::DenseGatsBench;
+use weft_bench::garfitnet::GarFitNetBench;
 use weft_bench::gat::GatBench;
 use weft_bench::multilevel::MultilevelBench;
 use weft_bench::multiresgnet::MultiResGnetBench;
@@ -34,6 +35,9 @@ pub enum BenchCommand {
     /// MultiResGNet (seed 001 §3.3) on the same character, one frame per stage (pose
     /// inputs, input transform, local branch, global branch, output transform) in ms.
     Multiresgnet(RefineArgs),
+    /// GarFitNet (seed 001 ch. 4) on the benchmark skirt, one frame per stage (posed body,
+    /// coarse regressor, refinement; the pair's one-off preparation apart) in ms.
+    Garfitnet(RefineArgs),
     /// The cloth simulator: seconds, Newton and PCG iterations per frame, edge strain
     /// and depth in the body.
     Simulate(SimulateArgs),
@@ -136,6 +140,7 @@ pub fn run(command: BenchCommand) -> Result<()> {
         BenchCommand::Multilevel(a) => multilevel(&a),
         BenchCommand::Gat(a) => gat(&a),
         BenchCommand::Densegats(a) => densegats(&a),
+        BenchCommand::Garfitnet(a) => garfitnet(&a),
         BenchCommand::Multiresgnet(a) => multiresgnet(&a),
         BenchCommand::Simulate(a) => simulate(&a),
     }
@@ -210,6 +215,24 @@ fn multiresgnet(args: &RefineArgs) -> Result<()> {
             reps: args.reps as usize,
         };
         let label = format!("multiresgnet {} N≈{vertices}", args.preset);
+        let spinner = spinner(&label);
+        let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
+        spinner.finish_and_clear();
+        out.row(&figures.with_context(|| label.clone())?)?;
+    }
+    Ok(())
+}
+
+fn garfitnet(args: &RefineArgs) -> Result<()> {
+    let (body, _) = args.common.body.load()?;
+    let mut out = Output::new(args.common.json);
+    for &vertices in &args.vertices {
+        let bench = GarFitNetBench {
+            preset: args.preset.clone(),
+            vertices,
+            reps: args.reps as usize,
+        };
+        let label = format!("garfitnet {} N≈{vertices}", args.preset);
         let spinner = spinner(&label);
         let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
         spinner.finish_and_clear();
