@@ -100,10 +100,10 @@ impl GarFitNetBench {
         let reps = self.reps;
         let alpha = vec![0.0; cfg.fit.factors];
         let pair_ms = try_median_ms(reps.min(3), || {
-            FitPair::new(body, &[], mesh.clone(), alpha.clone()).map(drop)
+            FitPair::new(body, &[], mesh.clone(), alpha.clone(), cfg.anchor).map(drop)
         })
         .map_err(BenchError::stage("the garment-body pair"))?;
-        let pair = FitPair::new(body, &[], mesh, alpha)
+        let pair = FitPair::new(body, &[], mesh, alpha, cfg.anchor)
             .map_err(BenchError::stage("the garment-body pair"))?;
         let stats = GarFitStats {
             fit: FactorAnalysis {

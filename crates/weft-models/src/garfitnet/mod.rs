@@ -16,5 +16,5 @@ pub use coarse::{association, coarse_target, CoarseRegressor, CoarseRegressorCon
 pub use fit::{garment_body_distances, FactorAnalysis, FactorAnalysisConfig};
 pub use model::{GarFit, GarFitConfig};
 pub use network::{Correction, GarFitNet, GarFitNetConfig};
-pub use pair::{BodyFrame, FitPair, COARSE_UNIT, REFINE_UNIT};
+pub use pair::{Anchor, BodyFrame, FitPair, COARSE_UNIT, REFINE_UNIT};
 pub use predictor::{GarFitPredictor, GarFitStats, Prediction, STATS_FILE};

@@ -14,8 +14,11 @@
 //! and [`REFINE_UNIT`] for the refinement (the folds: millimetres to centimetres), so both
 //! networks regress values of order one.
 
+use serde::{Deserialize, Serialize};
 use weft_body::features::volumetric::{VolumetricDistance, VolumetricParams};
+use weft_body::features::{transfer_weights_diffused, DiffusionParams};
 use weft_body::query::BodySurface;
+use weft_body::skinning::{skin, SkinWeights};
 use weft_body::{BodyModel, Pose, ShapedBody, Skinning};
 use weft_mesh::{Graph, TriMesh};
 
@@ -27,10 +30,27 @@ pub const COARSE_UNIT: f64 = 0.1;
 /// Metres per unit of the refinement's corrections (centimetres).
 pub const REFINE_UNIT: f64 = 0.01;
 
+/// Where the coarse regressor's garment vertex starts, `M_b'` of eq. 4.6.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Anchor {
+    /// The thesis's: the posed nearest body vertex (rest pose) of each garment vertex.
+    /// A skirt's hem then follows one thigh, and the regressor must learn the whole
+    /// offset to where the skirt hangs.
+    #[default]
+    BodyVertex,
+    /// The garment vertex itself, skinned with the body's weights transferred to it and
+    /// diffused over the garment where it stands off the body (weft-body's
+    /// `transfer_weights_diffused`): a loose skirt's hem blends both legs and the pelvis,
+    /// so the anchor already hangs where a skirt hangs and the regressor learns the rest.
+    Skinned,
+}
+
 /// The posed body of one frame, as the pair reads it.
 #[derive(Clone, Debug)]
 pub struct BodyFrame {
-    /// The associated body vertex of every garment vertex, posed (m).
+    /// Where every garment vertex starts, posed (m): its associated body vertex, or
+    /// itself skinned ([`Anchor`]).
     pub anchors: Vec<[f64; 3]>,
     /// Their vertex normals on the posed body.
     pub normals: Vec<[f64; 3]>,
@@ -52,6 +72,8 @@ pub struct FitPair {
     /// The fit parameter α of the pair.
     pub alpha: Vec<f64>,
     shaped: ShapedBody,
+    /// Diffused transferred weights of the garment ([`Anchor::Skinned`]).
+    skinning: Option<SkinWeights>,
     graph: Graph,
     /// `N × S` volumetric distances to the joints, m.
     joint_distances: Vec<f32>,
@@ -59,12 +81,14 @@ pub struct FitPair {
 }
 
 impl FitPair {
-    /// The pair of `garment` (on the body of shape `betas`, rest pose) with fit `alpha`.
+    /// The pair of `garment` (on the body of shape `betas`, rest pose) with fit `alpha`,
+    /// its coarse garment anchored as `anchor` says.
     pub fn new(
         model: &BodyModel,
         betas: &[f64],
         garment: TriMesh,
         alpha: Vec<f64>,
+        anchor: Anchor,
     ) -> Result<Self, ModelError> {
         if let Some(index) = garment
             .positions
@@ -99,6 +123,25 @@ impl FitPair {
             .matrix(&garment.positions)
             .map_err(|e| ModelError::Body(e.to_string()))?
             .to_f32();
+        let skinning = match anchor {
+            Anchor::BodyVertex => None,
+            Anchor::Skinned => {
+                let feature =
+                    |e: weft_body::features::FeatureError| ModelError::Body(e.to_string());
+                let body_weights = model.skinning_weights().map_err(feature)?;
+                let t = transfer_weights_diffused(
+                    &surface,
+                    &body_weights,
+                    &garment,
+                    &DiffusionParams::default(),
+                )
+                .map_err(feature)?;
+                Some(SkinWeights::from_dense(
+                    t.weights.as_slice(),
+                    t.weights.joint_count(),
+                ))
+            }
+        };
         Ok(FitPair {
             graph: garment.graph(),
             joints: volumetric.joint_count(),
@@ -107,6 +150,7 @@ impl FitPair {
             association,
             alpha,
             shaped,
+            skinning,
             joint_distances,
         })
     }
@@ -162,8 +206,18 @@ impl FitPair {
                 .map(|&v| values[v as usize])
                 .collect()
         };
+        let anchors = match &self.skinning {
+            None => at(&body.positions),
+            Some(weights) => {
+                let transforms = model
+                    .skeleton()
+                    .skinning_transforms_axis_angle(&self.shaped.joints, &axis_angles, trans)
+                    .map_err(|e| ModelError::Body(e.to_string()))?;
+                skin(Skinning::Lbs, &self.garment.positions, weights, &transforms)
+            }
+        };
         Ok(BodyFrame {
-            anchors: at(&body.positions),
+            anchors,
             normals: at(&normals),
             root,
             pose: *pose,
@@ -259,7 +313,14 @@ mod tests {
                 400,
             )
             .unwrap();
-        let pair = FitPair::new(&body, &betas, skirt.mesh, vec![0.5, -1.0, 2.0]).unwrap();
+        let pair = FitPair::new(
+            &body,
+            &betas,
+            skirt.mesh,
+            vec![0.5, -1.0, 2.0],
+            Anchor::BodyVertex,
+        )
+        .unwrap();
         (body, pair)
     }
 
@@ -328,16 +389,62 @@ mod tests {
         let (body, pair) = skirt_pair();
         let mut garment = pair.garment.clone();
         garment.positions[7][1] = f64::NAN;
-        let e = FitPair::new(&body, &[0.0], garment, vec![0.0; 3]).unwrap_err();
+        let e = FitPair::new(&body, &[0.0], garment, vec![0.0; 3], Anchor::BodyVertex).unwrap_err();
         assert!(e.to_string().contains("garment vertex"), "{e}");
-        let e = FitPair::new(&body, &[0.0], pair.garment.clone(), vec![f64::NAN]).unwrap_err();
+        let e = FitPair::new(
+            &body,
+            &[0.0],
+            pair.garment.clone(),
+            vec![f64::NAN],
+            Anchor::Skinned,
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("α"), "{e}");
         // A garment with no body region under it (moved 2 m to the side).
         let mut away = pair.garment.clone();
         for p in &mut away.positions {
             p[0] += 2.0;
         }
-        let e = FitPair::new(&body, &[0.0], away, vec![0.0; 3]).unwrap_err();
+        let e = FitPair::new(&body, &[0.0], away, vec![0.0; 3], Anchor::BodyVertex).unwrap_err();
         assert!(e.to_string().contains("not dressed on this body"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod anchor_tests {
+    use weft_garment::{FitBody, GarmentKind, Style};
+
+    use super::*;
+
+    #[test]
+    fn a_skinned_anchor_starts_on_the_garment_and_follows_the_body() {
+        let body = weft_body::default_body().unwrap();
+        let fit = FitBody::new(&body, &[]).unwrap();
+        let skirt = fit
+            .generate(
+                GarmentKind::Skirt,
+                &Style::from_seed(GarmentKind::Skirt, 2),
+                400,
+            )
+            .unwrap()
+            .mesh;
+        let pair = FitPair::new(&body, &[], skirt, vec![0.0; 3], Anchor::Skinned).unwrap();
+        let rest: Pose = [[0.0; 3]; weft_body::joints::SMPL_JOINT_COUNT];
+        let frame = pair.body_frame(&body, &rest, [0.0; 3]).unwrap();
+        // The rest pose leaves every vertex where it is.
+        for (a, g) in frame.anchors.iter().zip(&pair.garment.positions) {
+            assert!((0..3).all(|k| (a[k] - g[k]).abs() < 1e-9), "{a:?} vs {g:?}");
+        }
+        // Turning the pelvis turns the skirt with it.
+        let mut turned = rest;
+        turned[0] = [0.0, 0.8, 0.0];
+        let moved = pair.body_frame(&body, &turned, [0.0; 3]).unwrap();
+        let shift = moved
+            .anchors
+            .iter()
+            .zip(&pair.garment.positions)
+            .map(|(a, g)| (0..3).map(|k| (a[k] - g[k]).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0, f64::max);
+        assert!(shift > 0.05, "{shift}");
     }
 }

@@ -222,7 +222,7 @@ impl GarFitPredictor {
         garment: TriMesh,
     ) -> Result<FitPair, ModelError> {
         let alpha = self.stats.alpha(body, betas, &garment)?;
-        FitPair::new(body, betas, garment, alpha)
+        FitPair::new(body, betas, garment, alpha, self.config.anchor)
     }
 
     /// Both garments of one frame.

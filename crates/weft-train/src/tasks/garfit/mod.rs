@@ -153,12 +153,13 @@ impl FitSplit {
         body: &BodyModel,
         loaded: Loaded,
         alpha: &AlphaOf<'_>,
-        rounds: usize,
+        config: &GarFitConfig,
     ) -> Result<Self> {
+        let (rounds, anchor) = (config.smoothing_rounds, config.anchor);
         let mut pairs = Vec::with_capacity(loaded.garments.len());
         for (i, (betas, garment)) in loaded.garments.into_iter().enumerate() {
             let a = alpha(i, &betas, &garment)?;
-            pairs.push(FitPair::new(body, &betas, garment, a)?);
+            pairs.push(FitPair::new(body, &betas, garment, a, anchor)?);
         }
         let mut frames = Vec::new();
         let mut sequences = Vec::new();
@@ -209,12 +210,7 @@ pub fn load_fit_data(
         .collect::<Result<Vec<_>>>()?;
     let fit = FactorAnalysis::fit(&samples, &config.fit)?;
     let alphas = fit.alpha(&samples)?;
-    let train = FitSplit::build(
-        &body,
-        train,
-        &|i, _, _| Ok(alphas[i].clone()),
-        config.smoothing_rounds,
-    )?;
+    let train = FitSplit::build(&body, train, &|i, _, _| Ok(alphas[i].clone()), config)?;
     let stats = fit_normalizers(&train, fit, config.distance_cap)?;
     let mut splits = vec![train];
     for &split in others {
@@ -222,12 +218,7 @@ pub fn load_fit_data(
         let alpha = |_: usize, betas: &[f64], g: &weft_mesh::TriMesh| -> Result<Vec<f64>> {
             Ok(stats.alpha(&body, betas, g)?)
         };
-        splits.push(FitSplit::build(
-            &body,
-            loaded,
-            &alpha,
-            config.smoothing_rounds,
-        )?);
+        splits.push(FitSplit::build(&body, loaded, &alpha, config)?);
     }
     Ok((stats, splits))
 }
