@@ -77,6 +77,34 @@ fn garfitnet_trains_evaluates_and_animates() {
     for f in ["config.toml", "garfit.json", "checkpoints/latest"] {
         assert!(run.join(f).exists(), "{f} missing");
     }
+    // The same seed gives the same training curve.
+    let again = dir.join("again");
+    let o = weft(&[
+        "train",
+        "--model",
+        "garfitnet",
+        "--data",
+        s(&data),
+        "--out",
+        s(&again),
+        "--steps",
+        "4",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let losses = |run: &Path| -> Vec<f64> {
+        std::fs::read_to_string(run.join("metrics.jsonl"))
+            .unwrap()
+            .lines()
+            .map(|l| {
+                serde_json::from_str::<serde_json::Value>(l).unwrap()["loss"]
+                    .as_f64()
+                    .unwrap()
+            })
+            .collect()
+    };
+    assert_eq!(losses(&run), losses(&again));
+    assert_eq!(losses(&run).len(), 5);
 
     // Evaluation: the refined and the coarse output beside the baselines, per sequence.
     let o = weft(&["eval", s(&run), "--data", s(&data), "--no-timing"]);
