@@ -187,6 +187,29 @@ fn garfitnet_trains_evaluates_and_animates() {
     assert!(err.contains("not dressed on this body"), "{err}");
     assert!(!nowhere.exists());
 
+    // Widths the data cannot feed: refused by field before any step.
+    let wrong = dir.join("wrong.toml");
+    std::fs::write(&wrong, "[model.network]\ngarfit_features = 84\n").unwrap();
+    let o = weft(&[
+        "train",
+        "--model",
+        "garfitnet",
+        "--data",
+        s(&data),
+        "--out",
+        s(&dir.join("wrong")),
+        "--config",
+        s(&wrong),
+        "--quiet",
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("network.garfit_features = 84") && err.contains("85"),
+        "{err}"
+    );
+    assert!(!dir.join("wrong/checkpoints").exists());
+
     // A run of another kind where a GarFitNet run is expected is refused by name.
     let o = weft(&[
         "train",

@@ -9,7 +9,7 @@ use burn::tensor::Device;
 use super::coarse::{CoarseRegressor, CoarseRegressorConfig};
 use super::fit::FactorAnalysisConfig;
 use super::network::{GarFitNet, GarFitNetConfig};
-use super::pair::Anchor;
+use super::pair::{Anchor, FitPair};
 use crate::error::ModelError;
 
 /// Configuration of [`GarFit`] (`[model]` of a run).
@@ -89,6 +89,36 @@ impl GarFitConfig {
                 self.coarse.node_features,
                 6 + self.fit.factors
             )));
+        }
+        Ok(())
+    }
+
+    /// Checks that the networks read what `pair` gives (the body model's joint and shape
+    /// counts and α's factors decide the widths); errors name the field and the width
+    /// expected, instead of a shape failure inside the networks.
+    pub fn check_widths(&self, pair: &FitPair) -> Result<(), ModelError> {
+        for (field, set, given) in [
+            (
+                "coarse.node_features",
+                self.coarse.node_features,
+                pair.coarse_width(),
+            ),
+            (
+                "network.node_features",
+                self.network.node_features,
+                pair.refine_width(),
+            ),
+            (
+                "network.garfit_features",
+                self.network.garfit_features,
+                pair.garfit_width(),
+            ),
+        ] {
+            if set != given {
+                return Err(ModelError::Config(format!(
+                    "{field} = {set}, but this body model and fit give {given} per row (6 + joints for the node features, |β| + 3·joints + factors for the GarFit parameters)"
+                )));
+            }
         }
         Ok(())
     }

@@ -222,7 +222,9 @@ impl GarFitPredictor {
         garment: TriMesh,
     ) -> Result<FitPair, ModelError> {
         let alpha = self.stats.alpha(body, betas, &garment)?;
-        FitPair::new(body, betas, garment, alpha, self.config.anchor)
+        let pair = FitPair::new(body, betas, garment, alpha, self.config.anchor)?;
+        self.config.check_widths(&pair)?;
+        Ok(pair)
     }
 
     /// Both garments of one frame.

@@ -211,6 +211,9 @@ pub fn load_fit_data(
     let fit = FactorAnalysis::fit(&samples, &config.fit)?;
     let alphas = fit.alpha(&samples)?;
     let train = FitSplit::build(&body, train, &|i, _, _| Ok(alphas[i].clone()), config)?;
+    if let Some(pair) = train.pairs.first() {
+        config.check_widths(pair)?;
+    }
     let stats = fit_normalizers(&train, fit, config.distance_cap)?;
     let mut splits = vec![train];
     for &split in others {
