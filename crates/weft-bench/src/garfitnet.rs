@@ -9,6 +9,8 @@
 //! The networks run as burn layers on the flex CPU backend (no inference form yet, unlike
 //! DenseGATs and MultiResGNet). The thesis gives no timing for GarFitNet.
 
+use std::hint::black_box;
+
 use serde::Serialize;
 use weft_body::{BodyModel, Pose};
 use weft_models::garfitnet::predictor::{coarse_correction, refine_correction, values};
@@ -66,10 +68,10 @@ impl Row for GarFitNetFigures {
             ("N", self.vertices.to_string()),
             ("params", self.parameters.to_string()),
             ("pair (once)", format!("{:.1}", self.pair_ms)),
-            ("body", format!("{:.1}", self.body_ms)),
-            ("coarse feat.", format!("{:.1}", self.coarse_features_ms)),
+            ("body", format!("{:.2}", self.body_ms)),
+            ("coarse feat.", format!("{:.2}", self.coarse_features_ms)),
             ("coarse", format!("{:.1}", self.coarse_ms)),
-            ("refine feat.", format!("{:.1}", self.refine_features_ms)),
+            ("refine feat.", format!("{:.2}", self.refine_features_ms)),
             ("refine", format!("{:.1}", self.refine_ms)),
             ("frame ms", format!("{:.1}", self.frame_ms)),
         ]
@@ -122,8 +124,11 @@ impl GarFitNetBench {
         pose[2] = [0.3, 0.0, -0.1];
         pose[18] = [0.0, -1.2, 0.0];
         progress("body");
-        let body_ms = try_median_ms(reps, || pair.body_frame(body, &pose, [0.0; 3]).map(drop))
-            .map_err(BenchError::stage("posing the body"))?;
+        let body_ms = try_median_ms(reps, || {
+            pair.body_frame(body, &pose, [0.0; 3])
+                .map(|x| drop(black_box(x)))
+        })
+        .map_err(BenchError::stage("posing the body"))?;
         let frame = pair
             .body_frame(body, &pose, [0.0; 3])
             .map_err(BenchError::stage("posing the body"))?;
@@ -133,32 +138,32 @@ impl GarFitNetBench {
             .map_err(BenchError::stage("the networks"))?;
         progress("coarse regressor");
         let coarse_features_ms = try_median_ms(reps, || {
-            drop(pair.coarse_features(&frame));
+            black_box(pair.coarse_features(&frame));
             Ok::<(), BenchError>(())
         })?;
         let coarse_of = || -> Result<Vec<[f64; 3]>, weft_models::ModelError> {
             let delta = coarse_correction(&model, &stats, &[(&pair, &frame)], &device)?;
             Ok(pair.coarse_positions(&frame, &values(delta.vector())?))
         };
-        let coarse_ms = try_median_ms(reps, || coarse_of().map(drop))
+        let coarse_ms = try_median_ms(reps, || coarse_of().map(|x| drop(black_box(x))))
             .map_err(BenchError::stage("the coarse regressor"))?;
         let coarse = coarse_of().map_err(BenchError::stage("the coarse regressor"))?;
         progress("refinement");
         let refine_features_ms = try_median_ms(reps, || {
-            drop(pair.refine_features(&frame, &coarse));
-            drop(pair.garfit(&frame));
+            black_box(pair.refine_features(&frame, &coarse));
+            black_box(pair.garfit(&frame));
             Ok::<(), BenchError>(())
         })?;
         let refine_of = |coarse: &[[f64; 3]]| -> Result<Vec<[f64; 3]>, weft_models::ModelError> {
             let delta = refine_correction(&model, &stats, &[(&pair, &frame, coarse)], &device)?;
             Ok(pair.refined_positions(coarse, &values(delta.vector())?))
         };
-        let refine_ms = try_median_ms(reps, || refine_of(&coarse).map(drop))
+        let refine_ms = try_median_ms(reps, || refine_of(&coarse).map(|x| drop(black_box(x))))
             .map_err(BenchError::stage("the refinement"))?;
         progress("frame");
         let frame_ms = try_median_ms(reps, || {
-            pair.body_frame(body, &pose, [0.0; 3])?;
-            refine_of(&coarse_of()?).map(drop)
+            black_box(pair.body_frame(body, &pose, [0.0; 3])?);
+            refine_of(&coarse_of()?).map(|x| drop(black_box(x)))
         })
         .map_err(BenchError::stage("one frame"))?;
         Ok(GarFitNetFigures {
