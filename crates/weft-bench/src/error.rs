@@ -12,6 +12,9 @@ pub enum BenchError {
         /// What was given and what was expected.
         message: String,
     },
+    /// The device reported an error while running the queued operations.
+    #[error("the device failed: {0}")]
+    Device(String),
     /// A stage of the measured pipeline failed.
     #[error("{stage}")]
     Stage {

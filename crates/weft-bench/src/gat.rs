@@ -2,16 +2,18 @@
 //! skirt's mesh graph: forward on the inference device and forward + backward on the
 //! autodiff device (gradients of the input, `W` and both attention vectors), weft-nn's
 //! fused CSR kernel against burn's generic tensor path, so that each optimisation of
-//! the kernel is measured against the reference it must equal.
+//! the kernel is measured against the reference it must equal. On `device` = wgpu (the
+//! `wgpu` feature) only the generic path runs: the fused kernel is flex's alone. Each
+//! timed run waits for the device before the clock is read.
 
 use burn::tensor::{Device, Distribution, Tensor};
 use serde::Serialize;
 use weft_body::BodyModel;
-use weft_nn::backend::{cpu, cpu_autodiff};
 use weft_nn::{AttentionImpl, GatBlock, GatBlockConfig, GraphBatch};
 
+use crate::device::wait;
 use crate::timing::try_median_ms;
-use crate::{skirt, BenchError, Row};
+use crate::{skirt, BenchDevice, BenchError, Row};
 
 /// What to measure.
 #[derive(Clone, Debug)]
@@ -26,6 +28,8 @@ pub struct GatBench {
     pub channels: usize,
     /// Timed runs per figure.
     pub reps: usize,
+    /// The device the layer runs on.
+    pub device: BenchDevice,
 }
 
 /// What one implementation cost.
@@ -33,6 +37,11 @@ pub struct GatBench {
 pub struct GatFigures {
     /// `"gat"`.
     pub bench: &'static str,
+    /// The device: `cpu` (flex) or `wgpu`.
+    pub device: BenchDevice,
+    /// The GPU adapter's name, as its runtime reports it; absent on the CPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adapter: Option<String>,
     /// `fused` or `reference`.
     pub implementation: &'static str,
     /// Nodes of the graph.
@@ -72,38 +81,50 @@ impl GatBench {
                 });
             }
         }
+        self.device.check()?;
         progress("garment");
         let garment = skirt(body, self.vertices)?;
         let batch = GraphBatch::single(&garment.graph());
         let adjacency = batch.adjacency().clone();
         let n = batch.node_count();
         let mut out = Vec::new();
-        for (implementation, name) in [
-            (AttentionImpl::Auto, "fused"),
-            (AttentionImpl::Reference, "reference"),
-        ] {
+        let implementations: &[(AttentionImpl, &'static str)] = match self.device {
+            BenchDevice::Cpu => &[
+                (AttentionImpl::Auto, "fused"),
+                (AttentionImpl::Reference, "reference"),
+            ],
+            BenchDevice::Wgpu => &[(AttentionImpl::Reference, "reference")],
+        };
+        for &(implementation, name) in implementations {
             progress(name);
-            let device = cpu();
+            let device = self.device.inference()?;
             let block = self.layer(&device, implementation)?;
             let x = Tensor::<2>::random([n, self.input], Distribution::Normal(0.0, 1.0), &device);
             let forward_ms = try_median_ms(self.reps, || {
-                block.forward(x.clone(), &adjacency).map(|y| {
-                    let _ = y.into_data();
-                })
-            })
-            .map_err(BenchError::stage("GAT layer"))?;
-            let device = cpu_autodiff();
+                let y = block
+                    .forward(x.clone(), &adjacency)
+                    .map_err(BenchError::stage("GAT layer"))?;
+                y.try_into_data()
+                    .map(drop)
+                    .map_err(|e| BenchError::Device(format!("{e:?}")))
+            })?;
+            let device = self.device.autodiff()?;
             let block = self.layer(&device, implementation)?;
             let x = Tensor::<2>::random([n, self.input], Distribution::Normal(0.0, 1.0), &device)
                 .require_grad();
             let forward_backward_ms = try_median_ms(self.reps, || {
-                block.forward(x.clone(), &adjacency).map(|y| {
-                    let _ = y.sum().backward();
-                })
-            })
-            .map_err(BenchError::stage("GAT layer"))?;
+                let y = block
+                    .forward(x.clone(), &adjacency)
+                    .map_err(BenchError::stage("GAT layer"))?;
+                let grads = y.sum().backward();
+                wait(&device)?;
+                drop(grads);
+                Ok::<_, BenchError>(())
+            })?;
             out.push(GatFigures {
                 bench: "gat",
+                device: self.device,
+                adapter: weft_nn::backend::adapter_name(&device),
                 implementation: name,
                 vertices: n,
                 edges: adjacency.entry_count(),
@@ -135,6 +156,7 @@ impl GatBench {
 impl Row for GatFigures {
     fn cells(&self) -> Vec<(&'static str, String)> {
         vec![
+            ("device", crate::device::label(self.device, &self.adapter)),
             ("implementation", self.implementation.to_string()),
             ("N", self.vertices.to_string()),
             ("edges", self.edges.to_string()),

@@ -5,6 +5,8 @@
 //! JSON object).
 //!
 //! - [`timing`]: the median-of-repetitions timer every bench uses;
+//! - [`device`]: `--device cpu|wgpu` (wgpu with the `wgpu` feature) and waiting for a
+//!   device before the clock is read;
 //! - [`multilevel`]: the Multilevel model's inference stages and training step;
 //! - [`gat`]: one GAT layer, fused kernel against burn's generic path;
 //! - [`densegats`]: DenseGATs per stage on a character, with the linear maps' floor;
@@ -15,9 +17,12 @@
 //! - [`simulate`]: the cloth simulator on a garment and a motion, cost and quality.
 //!
 //! Figures are wall-clock times on the calling thread pool (rayon's, sized by
-//! `RAYON_NUM_THREADS`); each result records the thread count.
+//! `RAYON_NUM_THREADS`); each result records the thread count, its device and, on a GPU,
+//! the adapter, and a GPU timing stops only once the device has finished
+//! ([`device::wait`]).
 
 pub mod densegats;
+pub mod device;
 pub mod error;
 pub mod garfitnet;
 pub mod gat;
@@ -27,6 +32,7 @@ mod refine;
 pub mod simulate;
 pub mod timing;
 
+pub use device::BenchDevice;
 pub use error::BenchError;
 
 /// A measured configuration as a row of a human table: `(column, value)` pairs.

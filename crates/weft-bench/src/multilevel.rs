@@ -17,6 +17,12 @@
 //! same GEMM is also timed alone (`gemm_ms_per_frame`, `gemm_gflops`): the rate burn's
 //! matmul reaches on this machine bounds what the embedding can.
 //!
+//! With `device` = wgpu (the `wgpu` feature) the same model and stages run on burn's
+//! wgpu device, where every layer takes the generic tensor path. Each timed stage waits
+//! for the device (`sync`) before the clock is read; the whole forward pass also reads
+//! the vertices back to the host, as an application would. On the GPU the GEMM rate and
+//! `memory_gbs` are the device's (a matmul, and a 128 MiB tensor scaled into a new one).
+//!
 //! E^t2 is a stacked LSTM (528 MB of weights at `paper` widths); a window of `m` steps
 //! must read its input-side weights once and its hidden-side weights `m − 1` times (the
 //! first step's hidden state is zero), shared by the whole batch, so its floor is the
@@ -31,13 +37,14 @@ use weft_body::BodyModel;
 use weft_models::multilevel::{FrameInputs, GarmentInput, Multilevel, MultilevelConfig};
 use weft_models::Clip;
 use weft_motion::{generate, Motion, MotionKind, ProceduralParams};
-use weft_nn::backend::{cpu, cpu_autodiff, seeded};
+use weft_nn::backend::seeded;
 use weft_nn::AdamaxConfig;
 use weft_train::tasks::multilevel::{carried_sequence, Term};
 use weft_train::{MultilevelTask, MultilevelTraining, TrainTask};
 
+use crate::device::{wait, wait_for};
 use crate::timing::{median_ms, try_median_ms};
-use crate::{skirt, BenchError, Row};
+use crate::{skirt, BenchDevice, BenchError, Row};
 
 /// The first frame of the measured windows: enough history before it for E^t2.
 const FIRST_FRAME: usize = 8;
@@ -55,6 +62,8 @@ pub struct MultilevelBench {
     pub reps: usize,
     /// Also time one training step.
     pub train: bool,
+    /// The device the model runs on.
+    pub device: BenchDevice,
 }
 
 /// Milliseconds per frame of each inference stage.
@@ -77,13 +86,18 @@ pub struct Stages {
 pub struct MultilevelFigures {
     /// `"multilevel"`.
     pub bench: &'static str,
+    /// The device: `cpu` (flex) or `wgpu`.
+    pub device: BenchDevice,
+    /// The GPU adapter's name, as its runtime reports it; absent on the CPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adapter: Option<String>,
     /// The preset.
     pub preset: String,
     /// Vertices of the skirt measured.
     pub vertices: usize,
     /// Frames per batch.
     pub batch: usize,
-    /// Threads of the pool.
+    /// Threads of the pool (the host's, also on a GPU device).
     pub threads: usize,
     /// The whole forward pass (pair encoding excluded), ms per frame.
     pub ms_per_frame: f64,
@@ -103,7 +117,8 @@ pub struct MultilevelFigures {
     /// gemm_gflops, 4 · (P_x + P_h · (m − 1)) / T bytes at memory_gbs)` for `P_x`
     /// input-side and `P_h` hidden-side parameters and `m` history steps.
     pub t2_floor_ms_per_frame: f64,
-    /// Memory bandwidth of a large copy (bytes read + written per second), GB/s.
+    /// Memory bandwidth of a large copy (bytes read + written per second), GB/s: host
+    /// memory on the CPU, the device's memory on a GPU.
     pub memory_gbs: f64,
     /// The pair encoding (once per garment and body), ms.
     pub pair_encoding_ms: f64,
@@ -125,6 +140,7 @@ impl MultilevelBench {
                 message: format!("{}; expected 1 to 256 frames", self.batch),
             });
         }
+        self.device.check()?;
         if !(100..=200_000).contains(&self.vertices) {
             return Err(BenchError::Option {
                 what: "--vertices",
@@ -154,12 +170,13 @@ impl MultilevelBench {
             fps: motion.fps(),
         };
         let range = FIRST_FRAME..FIRST_FRAME + t;
-        let model = Multilevel::new(&cfg, &seeded(&cpu(), 1)).map_err(model_error)?;
+        let device = self.device.inference()?;
+        let model = Multilevel::new(&cfg, &seeded(&device, 1)).map_err(model_error)?;
         let g = GarmentInput::new(&garment, body, &[], &cfg).map_err(model_error)?;
         progress("pair encoding");
-        let pair_encoding_ms =
-            try_median_ms(reps.min(3), || model.encode_pair(&g).map(|p| sync(p.fused)))
-                .map_err(model_error)?;
+        let pair_encoding_ms = try_median_ms(reps.min(3), || {
+            wait_for(model.encode_pair(&g).map_err(model_error)?.fused)
+        })?;
         let pair = model.encode_pair(&g).map_err(model_error)?;
 
         progress("frame inputs");
@@ -169,11 +186,13 @@ impl MultilevelBench {
         .map_err(model_error)?;
         let f = FrameInputs::new(body, &clip, range.clone(), &cfg).map_err(model_error)?;
         progress("E^t1 and skinning weights");
-        let t1 = try_median_ms(reps, || model.skinning_weights(&pair, &g, &f).map(sync))
-            .map_err(model_error)?;
+        let t1 = try_median_ms(reps, || {
+            wait_for(model.skinning_weights(&pair, &g, &f).map_err(model_error)?)
+        })?;
         progress("E^t2");
-        let t2 =
-            try_median_ms(reps, || model.motion_features(&g, &f).map(sync)).map_err(model_error)?;
+        let t2 = try_median_ms(reps, || {
+            wait_for(model.motion_features(&g, &f).map_err(model_error)?)
+        })?;
         let motion_features = model.motion_features(&g, &f).map_err(model_error)?;
         let batch = g.frame_batch(t).map_err(model_error)?;
         let (mut embed, mut mp) = (0.0, 0.0);
@@ -183,24 +202,29 @@ impl MultilevelBench {
             } else {
                 "M^mp (next submodule)"
             });
-            let run_embed =
-                || sub.embed(pair.fused.clone(), motion_features.clone(), batch.batch(0));
-            embed += try_median_ms(reps, || run_embed().map(sync)).map_err(model_error)?;
-            mp += try_median_ms(reps, || sub.process(run_embed()?, &batch).map(sync))
-                .map_err(model_error)?;
+            let run_embed = || {
+                sub.embed(pair.fused.clone(), motion_features.clone(), batch.batch(0))
+                    .map_err(model_error)
+            };
+            embed += try_median_ms(reps, || wait_for(run_embed()?))?;
+            mp += try_median_ms(reps, || {
+                wait_for(sub.process(run_embed()?, &batch).map_err(model_error)?)
+            })?;
         }
         progress("skinning");
         let weights = model.skinning_weights(&pair, &g, &f).map_err(model_error)?;
         let blend = Tensor::<3>::zeros([t, n, 3], &model.device());
         let lbs = try_median_ms(reps, || {
-            model.skin(&g, &f, weights.clone(), blend.clone()).map(sync)
-        })
-        .map_err(model_error)?;
+            wait_for(
+                model
+                    .skin(&g, &f, weights.clone(), blend.clone())
+                    .map_err(model_error)?,
+            )
+        })?;
         progress("whole forward pass");
         let total = try_median_ms(reps, || {
-            model.forward(&pair, &g, &f).map(|p| sync(p.vertices))
-        })
-        .map_err(model_error)?;
+            read_back(model.forward(&pair, &g, &f).map_err(model_error)?.vertices)
+        })?;
 
         progress("embedding GEMM alone");
         let floor = 2.0 * (n * cfg.fused_width() * cfg.mp_width() * cfg.mp_submodules) as f64;
@@ -209,12 +233,15 @@ impl MultilevelBench {
             Distribution::Default,
             &model.device(),
         );
-        let gemm = median_ms(reps, || sync(pair.fused.clone().matmul(w.clone())))
+        let gemm = try_median_ms(reps, || wait_for(pair.fused.clone().matmul(w.clone())))?
             * cfg.mp_submodules as f64;
         let gemm_gflops = floor / (per(gemm) * 1e-3) / 1e9;
 
         progress("memory bandwidth");
-        let memory_gbs = memory_bandwidth_gbs(reps);
+        let memory_gbs = match self.device {
+            BenchDevice::Cpu => memory_bandwidth_gbs(reps),
+            BenchDevice::Wgpu => device_bandwidth_gbs(&device, reps)?,
+        };
         let t2_parameters = model.t2.num_params();
         let (p_x, p_h) = model.t2.parameter_split();
         let m = cfg.history;
@@ -225,12 +252,17 @@ impl MultilevelBench {
 
         let train_ms_per_frame = if self.train {
             progress("training step");
-            Some(per(train_step_ms(&cfg, body, garment, &motion, t, reps)?))
+            let device = self.device.autodiff()?;
+            Some(per(train_step_ms(
+                &cfg, body, garment, &motion, t, reps, &device,
+            )?))
         } else {
             None
         };
         Ok(MultilevelFigures {
             bench: "multilevel",
+            device: self.device,
+            adapter: weft_nn::backend::adapter_name(&device),
             preset: self.preset.clone(),
             vertices: n,
             batch: t,
@@ -272,9 +304,35 @@ fn memory_bandwidth_gbs(reps: usize) -> f64 {
     2.0 * BYTES as f64 / (ms * 1e-3) / 1e9
 }
 
+/// The rate of writing twice a 128 MiB tensor into a new one on `device` (one elementwise
+/// kernel reading and writing it, more than a GPU's L2 holds), counting the bytes read and
+/// written, GB/s. A last product is read back in part and checked, so that a kernel the
+/// device refused (an over-large binding, say) cannot pass for a fast one.
+fn device_bandwidth_gbs(device: &burn::tensor::Device, reps: usize) -> Result<f64, BenchError> {
+    const FLOATS: usize = 32 << 20;
+    let from = Tensor::<1>::random([FLOATS], Distribution::Default, device);
+    let ms = try_median_ms(reps.min(5), || wait_for(from.clone() * 2.0))?;
+    let tail = FLOATS - 4..FLOATS;
+    let read = |t: Tensor<1>| -> Result<Vec<f32>, BenchError> {
+        t.slice(tail.clone())
+            .try_into_data()
+            .map_err(|e| BenchError::Device(format!("{e:?}")))?
+            .try_into_vec::<f32>()
+            .map_err(|e| BenchError::Device(format!("{e:?}")))
+    };
+    let (x, y) = (read(from.clone())?, read(from * 2.0)?);
+    if x.iter().zip(&y).any(|(x, y)| (2.0 * x - y).abs() > 1e-6) {
+        return Err(BenchError::Device(format!(
+            "the bandwidth kernel wrote {y:?} for 2 × {x:?}"
+        )));
+    }
+    Ok(2.0 * (4 * FLOATS) as f64 / (ms * 1e-3) / 1e9)
+}
+
 /// One training step of `weft train`'s Multilevel task on a window of `t` frames of the
 /// garment carried rigidly by the walk (the step's cost does not depend on the targets),
-/// supervised terms, Adamax: the median in ms.
+/// supervised terms, Adamax, on `device` (with autodiff), waiting for the device after
+/// the update: the median in ms.
 fn train_step_ms(
     cfg: &MultilevelConfig,
     body: &BodyModel,
@@ -282,6 +340,7 @@ fn train_step_ms(
     motion: &Motion,
     t: usize,
     reps: usize,
+    device: &burn::tensor::Device,
 ) -> Result<f64, BenchError> {
     let seq = carried_sequence(
         "bench",
@@ -294,29 +353,29 @@ fn train_step_ms(
         window: t,
         ..MultilevelTraining::default()
     };
-    let device = cpu_autodiff();
     let train_error = BenchError::stage("training step");
-    let mut task =
-        MultilevelTask::new(cfg, &training, body.clone(), vec![seq], Vec::new(), &device)
-            .map_err(train_error)?;
-    let mut model = Multilevel::new(cfg, &seeded(&device, 0)).map_err(model_error)?;
+    let mut task = MultilevelTask::new(cfg, &training, body.clone(), vec![seq], Vec::new(), device)
+        .map_err(train_error)?;
+    let mut model = Multilevel::new(cfg, &seeded(device, 0)).map_err(model_error)?;
     let mut optim = AdamaxConfig::new().init();
     let terms = [Term::Vertex, Term::Edge, Term::Normal];
-    try_median_ms(reps, || -> weft_train::Result<()> {
-        let losses = task.losses(&model, 0, &terms)?;
+    try_median_ms(reps, || -> Result<(), BenchError> {
+        let losses = task
+            .losses(&model, 0, &terms)
+            .map_err(BenchError::stage("training step"))?;
         if let Some(total) = losses.into_iter().reduce(|a, b| a + b) {
             let grads = GradientsParams::from_grads(total.backward(), &model);
             model = optim.step(1e-4, model.clone(), grads);
         }
-        Ok(())
+        wait(device)
     })
-    .map_err(BenchError::stage("training step"))
 }
 
 impl Row for MultilevelFigures {
     fn cells(&self) -> Vec<(&'static str, String)> {
         let ms = |x: f64| format!("{x:.2}");
         let mut cells = vec![
+            ("device", crate::device::label(self.device, &self.adapter)),
             ("preset", self.preset.clone()),
             ("N", self.vertices.to_string()),
             ("T", self.batch.to_string()),
@@ -351,7 +410,9 @@ fn model_error(e: weft_models::ModelError) -> BenchError {
     BenchError::stage("Multilevel")(e)
 }
 
-/// Waits for a tensor's value (burn may evaluate lazily).
-fn sync<const D: usize>(t: Tensor<D>) {
-    let _ = t.into_data();
+/// Reads a tensor back to the host (which waits for the operations that computed it).
+fn read_back<const D: usize>(t: Tensor<D>) -> Result<(), BenchError> {
+    t.try_into_data()
+        .map(drop)
+        .map_err(|e| BenchError::Device(format!("{e:?}")))
 }

@@ -46,6 +46,7 @@ fn multilevel_reports_every_stage_per_configuration() {
     assert_eq!(rows.len(), 2);
     for (row, batch) in rows.iter().zip([1.0, 2.0]) {
         assert_eq!(row["bench"], "multilevel");
+        assert_eq!(row["device"], "cpu");
         assert_eq!(row["preset"], "cpu");
         assert_eq!(number(row, "batch"), batch);
         let n = number(row, "vertices");
@@ -81,6 +82,7 @@ fn gat_compares_the_fused_kernel_with_the_reference() {
         .collect();
     assert_eq!(names, ["fused", "reference"]);
     for r in &rows {
+        assert_eq!(r["device"], "cpu");
         assert!(number(r, "edges") > number(r, "vertices"));
         assert!(number(r, "forward_ms") > 0.0);
         assert!(number(r, "forward_backward_ms") > 0.0);
@@ -187,6 +189,23 @@ fn bad_options_are_named() {
         let err = stderr(&out);
         assert!(err.contains(names), "{args:?}: {err}");
         assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+    }
+}
+
+/// A binary built without the `wgpu` feature refuses `--device wgpu` in one line that
+/// says so, before any work.
+#[test]
+#[cfg(not(feature = "wgpu"))]
+fn wgpu_device_needs_the_feature() {
+    for bench in ["multilevel", "gat"] {
+        let out = weft(&["bench", bench, "--device", "wgpu", "--vertices", "300"]);
+        assert!(!out.status.success(), "{bench}");
+        let err = stderr(&out);
+        assert!(
+            err.contains("--device") && err.contains("without the `wgpu` feature"),
+            "{bench}: {err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{bench}: {err}");
     }
 }
 

@@ -7,8 +7,9 @@
 //!   ([`cpu_autodiff`]). The fused GAT kernel ([`crate::gat`]) and the sparse unpooling
 //!   product ([`crate::sparse`]) have hand-written CPU implementations here;
 //! - `wgpu` and `cuda` cargo features of this crate switch on burn's GPU backends
-//!   (`Device::wgpu(..)`, `Device::cuda(..)`); every layer then takes the generic tensor
-//!   path, which is the same code the tests compare the fused kernels with.
+//!   (`Device::wgpu(..)`, `Device::cuda(..)`; `wgpu()` and `wgpu_autodiff()` here); every
+//!   layer then takes the generic tensor path, which is the same code the tests compare the
+//!   fused kernels with.
 
 use burn::backend::DispatchDevice;
 use burn::tensor::Device;
@@ -23,6 +24,21 @@ pub fn cpu_autodiff() -> Device {
     Device::flex().autodiff()
 }
 
+/// burn's wgpu device on the default adapter (wgpu prefers a discrete, "high power" GPU;
+/// `CUBECL_WGPU_DEFAULT_DEVICE` overrides the choice), without autodiff; the graphics API
+/// (Vulkan on Linux) is the runtime's to settle. Every layer takes the generic tensor path
+/// there. Opening the device is lazy: the first tensor on it starts the runtime.
+#[cfg(feature = "wgpu")]
+pub fn wgpu() -> Device {
+    Device::wgpu(burn::tensor::DeviceKind::DefaultDevice)
+}
+
+/// [`wgpu`] with autodiff (training).
+#[cfg(feature = "wgpu")]
+pub fn wgpu_autodiff() -> Device {
+    wgpu().autodiff()
+}
+
 /// The flex CPU device seeded for deterministic parameter initialisation.
 pub fn seeded(device: &Device, seed: u64) -> Device {
     device.seed(seed);
@@ -35,6 +51,23 @@ pub fn is_flex(device: &Device) -> bool {
         device.clone().inner().as_dispatch(),
         DispatchDevice::Flex(_)
     )
+}
+
+/// The name a GPU device's adapter gives itself (`NVIDIA H100 80GB HBM3`, say), opening the
+/// device; `None` on flex, in a build without a GPU feature, or where the runtime reports none.
+pub fn adapter_name(device: &Device) -> Option<String> {
+    #[cfg(any(feature = "wgpu", feature = "cuda"))]
+    {
+        device
+            .as_dispatch()
+            .identity()
+            .map(|identity| identity.name)
+    }
+    #[cfg(not(any(feature = "wgpu", feature = "cuda")))]
+    {
+        let _ = device;
+        None
+    }
 }
 
 /// Asks glibc's malloc to keep freed memory in the process instead of handing it back to the

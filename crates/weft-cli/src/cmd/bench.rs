@@ -4,7 +4,7 @@
 //! compare weft with other tools). The measurements live in weft-bench.
 
 use anyhow::{Context, Result};
-use clap::{Args, Subcommand};
+use clap::{Args, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use weft_bench::densegats::DenseGatsBench;
@@ -13,7 +13,7 @@ use weft_bench::gat::GatBench;
 use weft_bench::multilevel::MultilevelBench;
 use weft_bench::multiresgnet::MultiResGnetBench;
 use weft_bench::simulate::bench_simulate;
-use weft_bench::Row;
+use weft_bench::{BenchDevice, Row};
 use weft_mesh::io::load_mesh;
 use weft_sim::SequenceOptions;
 
@@ -41,6 +41,25 @@ pub enum BenchCommand {
     /// The cloth simulator: seconds, Newton and PCG iterations per frame, edge strain
     /// and depth in the body.
     Simulate(SimulateArgs),
+}
+
+/// The device a network bench runs on.
+#[derive(Clone, Copy, ValueEnum)]
+pub enum DeviceArg {
+    /// burn's flex CPU backend, with weft's fused kernels.
+    Cpu,
+    /// burn's wgpu backend on the default GPU adapter (generic tensor path); needs a
+    /// binary built with `--features wgpu`.
+    Wgpu,
+}
+
+impl From<DeviceArg> for BenchDevice {
+    fn from(d: DeviceArg) -> Self {
+        match d {
+            DeviceArg::Cpu => BenchDevice::Cpu,
+            DeviceArg::Wgpu => BenchDevice::Wgpu,
+        }
+    }
 }
 
 /// What every bench takes.
@@ -71,6 +90,9 @@ pub struct MultilevelArgs {
     /// of --batch frames.
     #[arg(long)]
     train: bool,
+    /// Device: cpu (flex) or wgpu (a binary built with `--features wgpu`).
+    #[arg(long, value_enum, default_value = "cpu")]
+    device: DeviceArg,
     #[command(flatten)]
     common: Common,
 }
@@ -92,6 +114,10 @@ pub struct GatArgs {
     /// Timed runs per figure, after one warm-up (the median is reported).
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=10000))]
     reps: u32,
+    /// Device: cpu (flex; fused and generic paths) or wgpu (generic path; a binary built
+    /// with `--features wgpu`).
+    #[arg(long, value_enum, default_value = "cpu")]
+    device: DeviceArg,
     #[command(flatten)]
     common: Common,
 }
@@ -147,6 +173,8 @@ pub fn run(command: BenchCommand) -> Result<()> {
 }
 
 fn multilevel(args: &MultilevelArgs) -> Result<()> {
+    let device = BenchDevice::from(args.device);
+    device.check()?;
     let (body, _) = args.common.body.load()?;
     let mut out = Output::new(args.common.json);
     for &vertices in &args.vertices {
@@ -157,8 +185,12 @@ fn multilevel(args: &MultilevelArgs) -> Result<()> {
                 batch,
                 reps: args.reps as usize,
                 train: args.train,
+                device,
             };
-            let label = format!("multilevel {} N≈{vertices} T={batch}", args.preset);
+            let label = format!(
+                "multilevel {} N≈{vertices} T={batch} on {device}",
+                args.preset
+            );
             let spinner = spinner(&label);
             let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
             spinner.finish_and_clear();
@@ -169,6 +201,8 @@ fn multilevel(args: &MultilevelArgs) -> Result<()> {
 }
 
 fn gat(args: &GatArgs) -> Result<()> {
+    let device = BenchDevice::from(args.device);
+    device.check()?;
     let (body, _) = args.common.body.load()?;
     let bench = GatBench {
         vertices: args.vertices,
@@ -176,6 +210,7 @@ fn gat(args: &GatArgs) -> Result<()> {
         heads: args.heads,
         channels: args.channels,
         reps: args.reps as usize,
+        device,
     };
     let spinner = spinner("gat");
     let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
