@@ -76,12 +76,7 @@ pub fn train_run(spec: &TrainSpec, log: &mut dyn FnMut(&str)) -> Result<Outcome,
     match spec.model {
         ModelKind::Multilevel => {
             let cfg = resolve_multilevel(spec)?;
-            let options = RunOptions {
-                resume: spec.resume,
-                progress: spec.progress,
-                session_steps: None,
-            };
-            train_multilevel(&cfg, &spec.data, &spec.out, &options, log)
+            train_multilevel(&cfg, &spec.data, &spec.out, &run_options(spec), log)
         }
         ModelKind::DenseGats => {
             let cfg: DenseGatsRun = resolve(spec)?;
@@ -96,6 +91,15 @@ pub fn train_run(spec: &TrainSpec, log: &mut dyn FnMut(&str)) -> Result<Outcome,
             train_garfit(&cfg, spec, log)
         }
         _ => unreachable!("refused by check_implemented"),
+    }
+}
+
+/// The loop's options of `spec`: resume, progress bar, the whole run in one session.
+fn run_options(spec: &TrainSpec) -> RunOptions {
+    RunOptions {
+        resume: spec.resume,
+        progress: spec.progress,
+        session_steps: None,
     }
 }
 
@@ -218,12 +222,7 @@ pub fn train_refine<M: ModelSettings + RefineConfig>(
         cfg.train.trainer.steps,
         spec.out.display()
     ));
-    let options = RunOptions {
-        resume: spec.resume,
-        progress: spec.progress,
-        session_steps: None,
-    };
-    let (_, outcome) = train(&mut task, model, &run, &options)?;
+    let (_, outcome) = train(&mut task, model, &run, &run_options(spec))?;
     Ok(outcome)
 }
 
@@ -272,11 +271,6 @@ pub fn train_garfit(
         spec.out.display()
     ));
     let model = cfg.model.init(&device)?;
-    let options = RunOptions {
-        resume: spec.resume,
-        progress: spec.progress,
-        session_steps: None,
-    };
-    let (_, outcome) = train(&mut task, model, &run, &options)?;
+    let (_, outcome) = train(&mut task, model, &run, &run_options(spec))?;
     Ok(outcome)
 }

@@ -487,6 +487,19 @@ pub fn config_text(header: &RunHeader, model: &toml::Table, train: &toml::Table)
     })
 }
 
+/// Writes `value` as pretty JSON to `dir/file` atomically, creating `dir`: the
+/// statistics a task fits before the first step (feature normalisers, GarFitNet's factor
+/// model), which inference reads beside the checkpoints.
+pub fn save_json<T: Serialize>(dir: &Path, file: &str, value: &T) -> Result<()> {
+    let path = dir.join(file);
+    let text = serde_json::to_string_pretty(value).map_err(|e| TrainError::Write {
+        what: format!("{}: {e}", path.display()),
+        source: Box::new(e),
+    })?;
+    std::fs::create_dir_all(dir).map_err(|e| TrainError::io(dir, e))?;
+    write_file(&path, text.as_bytes())
+}
+
 fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic(path, |w| w.write_all(bytes)).map_err(|e| TrainError::io(path, e))
 }

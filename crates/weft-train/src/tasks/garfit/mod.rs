@@ -248,14 +248,7 @@ fn fit_normalizers(train: &FitSplit, fit: FactorAnalysis, cap: f64) -> Result<Ga
 
 /// Writes `stats` into the run directory `dir` atomically.
 pub fn save_stats(dir: &Path, stats: &GarFitStats) -> Result<()> {
-    let path = dir.join(STATS_FILE);
-    let text = serde_json::to_string(stats).map_err(|e| TrainError::Write {
-        what: format!("{}: {e}", path.display()),
-        source: Box::new(e),
-    })?;
-    std::fs::create_dir_all(dir).map_err(|e| TrainError::io(dir, e))?;
-    weft_mesh::io::write_atomic(&path, |w| w.write_all(text.as_bytes()))
-        .map_err(|e| TrainError::io(&path, e))
+    crate::run::save_json(dir, STATS_FILE, stats)
 }
 
 /// The mean distance between two garments, cm.

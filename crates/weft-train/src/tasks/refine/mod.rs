@@ -216,14 +216,7 @@ impl<M> RefineTask<M> {
 
 /// Writes `normalizer` into the run directory `dir` atomically.
 pub fn save_normalizer(dir: &Path, normalizer: &FeatureNormalizer) -> Result<()> {
-    let path = dir.join(NORMALIZER_FILE);
-    let text = serde_json::to_string_pretty(normalizer).map_err(|e| TrainError::Write {
-        what: format!("{}: {e}", path.display()),
-        source: Box::new(e),
-    })?;
-    std::fs::create_dir_all(dir).map_err(|e| TrainError::io(dir, e))?;
-    weft_mesh::io::write_atomic(&path, |w| w.write_all(text.as_bytes()))
-        .map_err(|e| TrainError::io(&path, e))
+    crate::run::save_json(dir, NORMALIZER_FILE, normalizer)
 }
 
 impl<M> TrainTask for RefineTask<M>
