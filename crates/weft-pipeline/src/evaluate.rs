@@ -22,8 +22,6 @@ pub fn evaluate_run(
     progress: &mut dyn FnMut(&str),
 ) -> Result<(Evaluation, std::path::PathBuf), PipelineError> {
     let loading = || format!("loading run {}", run.display());
-    let dataset =
-        Dataset::open(data).map_err(stage(&format!("opening dataset {}", data.display())))?;
     // GarFitNet is scored twice: its coarse regressor alone and the refined output
     // (Tables 4.1–4.2).
     let garfit = match read_run_config(run).map_err(stage(&loading()))?.0.model {
@@ -34,6 +32,8 @@ pub fn evaluate_run(
         Some(_) => None,
         None => Some(load_deformer(run).map_err(stage(&loading()))?),
     };
+    let dataset =
+        Dataset::open(data).map_err(stage(&format!("opening dataset {}", data.display())))?;
     let coarse = garfit.as_ref().map(GarFitPredictor::coarse_stage);
     let mut methods: Vec<&dyn Deformer> = Vec::new();
     if let Some(g) = &garfit {
