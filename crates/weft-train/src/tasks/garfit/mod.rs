@@ -271,8 +271,9 @@ pub struct GarFitTask {
     stage: Stage,
     /// Frame indices of every item, in a seeded order.
     groups: Vec<Vec<usize>>,
-    /// The frozen coarse regressor's garment of every training frame (refinement stage).
-    coarse_train: Vec<Vec<[f64; 3]>>,
+    /// The frozen coarse regressor's garment of every training frame (refinement stage),
+    /// or why it could not be made (reported by the next refinement step).
+    coarse_train: std::result::Result<Vec<Vec<[f64; 3]>>, String>,
 }
 
 impl GarFitTask {
@@ -305,7 +306,7 @@ impl GarFitTask {
             validation,
             stage: Stage::Coarse,
             groups,
-            coarse_train: Vec::new(),
+            coarse_train: Ok(Vec::new()),
         })
     }
 
@@ -378,7 +379,14 @@ impl TrainTask for GarFitTask {
                         .loss(self.tensor(targets))
                 }
                 Term::Refine => {
-                    if self.coarse_train.len() != self.train.frames.len() {
+                    let cached = self.coarse_train.as_ref().map_err(|e| {
+                        TrainError::config(
+                            "stage",
+                            "refine",
+                            &format!("the frozen coarse regressor's garments ({e})"),
+                        )
+                    })?;
+                    if cached.len() != self.train.frames.len() {
                         return Err(TrainError::config(
                             "stage",
                             "refine",
@@ -390,7 +398,7 @@ impl TrainTask for GarFitTask {
                     for &i in frames {
                         let f = &self.train.frames[i];
                         let pair = &self.train.pairs[f.pair];
-                        let coarse = &self.coarse_train[i];
+                        let coarse = &cached[i];
                         inputs.push((pair, &f.body, coarse.as_slice()));
                         targets.extend(pair.refine_targets(coarse, &f.truth));
                     }
@@ -463,7 +471,9 @@ impl TrainTask for GarFitTask {
         };
         let frozen = model.valid();
         // A failure here surfaces as the refinement term's error on the next step.
-        self.coarse_train = self.coarse_all(&frozen, &self.train).unwrap_or_default();
+        self.coarse_train = self
+            .coarse_all(&frozen, &self.train)
+            .map_err(|e| e.to_string());
         model
     }
 }
