@@ -118,6 +118,7 @@ impl GarFitNetBench {
             coarse: identity(pair.coarse_width()),
             refine: identity(pair.refine_width()),
             garfit: identity(pair.garfit_width()),
+            pairs: Vec::new(),
         };
         let mut pose: Pose = [[0.0; 3]; 24];
         pose[1] = [-0.5, 0.0, 0.1];

@@ -13,8 +13,8 @@ pub mod pair;
 pub mod predictor;
 
 pub use coarse::{association, coarse_target, CoarseRegressor, CoarseRegressorConfig};
-pub use fit::{garment_body_distances, FactorAnalysis, FactorAnalysisConfig};
+pub use fit::{fit_sample, garment_body_distances, FactorAnalysis, FactorAnalysisConfig};
 pub use model::{GarFit, GarFitConfig};
 pub use network::{Correction, GarFitNet, GarFitNetConfig};
 pub use pair::{Anchor, BodyFrame, FitPair, COARSE_UNIT, REFINE_UNIT};
-pub use predictor::{GarFitPredictor, GarFitStats, Prediction, STATS_FILE};
+pub use predictor::{GarFitPredictor, GarFitStats, PairFit, Prediction, STATS_FILE};

@@ -15,7 +15,7 @@ use weft_body::BodyModel;
 use weft_mesh::{Graph, TriMesh};
 use weft_nn::{FeatureNormalizer, GraphBatch};
 
-use super::fit::{garment_body_distances, FactorAnalysis};
+use super::fit::{fit_sample, FactorAnalysis};
 use super::model::{GarFit, GarFitConfig};
 use super::network::Correction;
 use super::pair::{BodyFrame, FitPair};
@@ -41,6 +41,23 @@ pub struct GarFitStats {
     pub refine: FeatureNormalizer,
     /// The GarFit parameters `(β, θ, α)`.
     pub garfit: FeatureNormalizer,
+    /// α of every training pair, to read the factors as Fig. 4.3 does (the first orders
+    /// the pairs from tight to loose).
+    #[serde(default)]
+    pub pairs: Vec<PairFit>,
+}
+
+/// One training pair's fit parameter.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairFit {
+    /// The garment's id in the dataset.
+    pub garment: String,
+    /// The body's id in the dataset.
+    pub body: String,
+    /// The body's shape.
+    pub betas: Vec<f64>,
+    /// α.
+    pub alpha: Vec<f64>,
 }
 
 impl GarFitStats {
@@ -52,10 +69,7 @@ impl GarFitStats {
         betas: &[f64],
         garment: &TriMesh,
     ) -> Result<Vec<f64>, ModelError> {
-        let body = model
-            .shape(betas)
-            .map_err(|e| ModelError::Body(e.to_string()))?;
-        let sample = garment_body_distances(&body.positions, garment, self.distance_cap)?;
+        let sample = fit_sample(model, betas, garment, self.distance_cap)?;
         let mut alpha = self.fit.alpha(&[sample])?;
         Ok(alpha.pop().unwrap_or_default())
     }

@@ -28,8 +28,8 @@ use weft_data::{Dataset, Split};
 use weft_mesh::rng::SplitMix64;
 use weft_models::garfitnet::predictor::{coarse_correction, refine_correction, values};
 use weft_models::garfitnet::{
-    coarse_target, garment_body_distances, BodyFrame, FactorAnalysis, FitPair, GarFit,
-    GarFitConfig, GarFitStats, STATS_FILE,
+    coarse_target, fit_sample, BodyFrame, FactorAnalysis, FitPair, GarFit, GarFitConfig,
+    GarFitStats, PairFit, STATS_FILE,
 };
 use weft_nn::NormalizerFit;
 
@@ -133,17 +133,6 @@ fn load(set: &Dataset, split: Split) -> Result<Loaded> {
     })
 }
 
-/// One pair's garment–body distances (the factor model's sample).
-fn sample(
-    body: &BodyModel,
-    betas: &[f64],
-    garment: &weft_mesh::TriMesh,
-    cap: f64,
-) -> Result<Vec<f64>> {
-    let shaped = body.shape(betas)?;
-    Ok(garment_body_distances(&shaped.positions, garment, cap)?)
-}
-
 /// α of pair `i` (its β and rest-pose garment).
 type AlphaOf<'a> = dyn Fn(usize, &[f64], &weft_mesh::TriMesh) -> Result<Vec<f64>> + 'a;
 
@@ -206,7 +195,7 @@ pub fn load_fit_data(
     let samples = train
         .garments
         .iter()
-        .map(|(betas, g)| sample(&body, betas, g, config.distance_cap))
+        .map(|(betas, g)| Ok(fit_sample(&body, betas, g, config.distance_cap)?))
         .collect::<Result<Vec<_>>>()?;
     let fit = FactorAnalysis::fit(&samples, &config.fit)?;
     let alphas = fit.alpha(&samples)?;
@@ -237,12 +226,24 @@ fn fit_normalizers(train: &FitSplit, fit: FactorAnalysis, cap: f64) -> Result<Ga
         refine.observe(&pair.refine_features(&f.body, &f.smoothed))?;
         garfit.observe(&pair.garfit(&f.body))?;
     }
+    let pairs = train
+        .keys
+        .iter()
+        .zip(&train.pairs)
+        .map(|((garment, body), pair)| PairFit {
+            garment: garment.clone(),
+            body: body.clone(),
+            betas: pair.betas.clone(),
+            alpha: pair.alpha.clone(),
+        })
+        .collect();
     Ok(GarFitStats {
         fit,
         distance_cap: cap,
         coarse: coarse.finish()?,
         refine: refine.finish()?,
         garfit: garfit.finish()?,
+        pairs,
     })
 }
 
