@@ -13,7 +13,7 @@ use std::hint::black_box;
 
 use serde::Serialize;
 use weft_body::{BodyModel, Pose};
-use weft_models::garfitnet::predictor::{coarse_correction, refine_correction, values};
+use weft_models::garfitnet::predictor::{coarse_garment, refined_garment};
 use weft_models::garfitnet::{FactorAnalysis, FitPair, GarFitConfig, GarFitStats};
 use weft_nn::backend::cpu;
 use weft_nn::FeatureNormalizer;
@@ -142,10 +142,7 @@ impl GarFitNetBench {
             black_box(pair.coarse_features(&frame));
             Ok::<(), BenchError>(())
         })?;
-        let coarse_of = || -> Result<Vec<[f64; 3]>, weft_models::ModelError> {
-            let delta = coarse_correction(&model, &stats, &[(&pair, &frame)], &device)?;
-            Ok(pair.coarse_positions(&frame, &values(delta.vector())?))
-        };
+        let coarse_of = || coarse_garment(&model, &stats, &pair, &frame, &device);
         let coarse_ms = try_median_ms(reps, || coarse_of().map(|x| drop(black_box(x))))
             .map_err(BenchError::stage("the coarse regressor"))?;
         let coarse = coarse_of().map_err(BenchError::stage("the coarse regressor"))?;
@@ -155,10 +152,8 @@ impl GarFitNetBench {
             black_box(pair.garfit(&frame));
             Ok::<(), BenchError>(())
         })?;
-        let refine_of = |coarse: &[[f64; 3]]| -> Result<Vec<[f64; 3]>, weft_models::ModelError> {
-            let delta = refine_correction(&model, &stats, &[(&pair, &frame, coarse)], &device)?;
-            Ok(pair.refined_positions(coarse, &values(delta.vector())?))
-        };
+        let refine_of =
+            |coarse: &[[f64; 3]]| refined_garment(&model, &stats, &pair, &frame, coarse, &device);
         let refine_ms = try_median_ms(reps, || refine_of(&coarse).map(|x| drop(black_box(x))))
             .map_err(BenchError::stage("the refinement"))?;
         progress("frame");

@@ -17,4 +17,4 @@ pub use fit::{fit_sample, garment_body_distances, FactorAnalysis, FactorAnalysis
 pub use model::{GarFit, GarFitConfig};
 pub use network::{Correction, GarFitNet, GarFitNetConfig};
 pub use pair::{Anchor, BodyFrame, FitPair, COARSE_UNIT, REFINE_UNIT};
-pub use predictor::{GarFitPredictor, GarFitStats, PairFit, Prediction, STATS_FILE};
+pub use predictor::{GarFitPredictor, GarFitStats, PairFit, STATS_FILE};

@@ -157,6 +157,31 @@ pub fn refine_correction(
     )
 }
 
+/// One frame's coarse garment `M_coarse` (eq. 4.6) under `model`.
+pub fn coarse_garment(
+    model: &GarFit,
+    stats: &GarFitStats,
+    pair: &FitPair,
+    frame: &BodyFrame,
+    device: &Device,
+) -> Result<Vec<[f64; 3]>, ModelError> {
+    let delta = coarse_correction(model, stats, &[(pair, frame)], device)?;
+    Ok(pair.coarse_positions(frame, &values(delta.vector())?))
+}
+
+/// One frame's refined garment from its coarse garment `coarse` under `model`.
+pub fn refined_garment(
+    model: &GarFit,
+    stats: &GarFitStats,
+    pair: &FitPair,
+    frame: &BodyFrame,
+    coarse: &[[f64; 3]],
+    device: &Device,
+) -> Result<Vec<[f64; 3]>, ModelError> {
+    let delta = refine_correction(model, stats, &[(pair, frame, coarse)], device)?;
+    Ok(pair.refined_positions(coarse, &values(delta.vector())?))
+}
+
 /// A trained GarFitNet run ready to run on the CPU.
 pub struct GarFitPredictor {
     /// Both networks, at the run's latest checkpoint (validation mode).
@@ -167,15 +192,6 @@ pub struct GarFitPredictor {
     pub stats: GarFitStats,
     device: Device,
     checkpoint: PathBuf,
-}
-
-/// One frame's garments.
-#[derive(Clone, Debug)]
-pub struct Prediction {
-    /// `M_coarse`.
-    pub coarse: Vec<[f64; 3]>,
-    /// GarFitNet's output.
-    pub refined: Vec<[f64; 3]>,
 }
 
 impl GarFitPredictor {
@@ -240,43 +256,34 @@ impl GarFitPredictor {
         self.config.check_widths(&pair)?;
         Ok(pair)
     }
-
-    /// Both garments of one frame.
-    pub fn predict(&self, pair: &FitPair, frame: &BodyFrame) -> Result<Prediction, ModelError> {
-        let delta = coarse_correction(&self.model, &self.stats, &[(pair, frame)], &self.device)?;
-        let coarse = pair.coarse_positions(frame, &values(delta.vector())?);
-        let delta = refine_correction(
-            &self.model,
-            &self.stats,
-            &[(pair, frame, &coarse)],
-            &self.device,
-        )?;
-        let refined = pair.refined_positions(&coarse, &values(delta.vector())?);
-        Ok(Prediction { coarse, refined })
-    }
 }
 
 impl GarFitPredictor {
-    /// Both garments of every frame of `clip` (`garment` as it sits on the body of
-    /// `clip.betas` in the rest pose).
-    pub fn animate_both(
+    /// The coarse garment (`refined` false) or GarFitNet's output of every frame of `clip`
+    /// (`garment` as it sits on the body of `clip.betas` in the rest pose).
+    pub fn animate_stage(
         &self,
         garment: &TriMesh,
         body: &BodyModel,
         clip: &Clip,
-    ) -> Result<(Frames, Frames), ModelError> {
+        refined: bool,
+    ) -> Result<Frames, ModelError> {
         clip.check()?;
         let betas: Vec<f64> = clip.betas.iter().map(|&b| f64::from(b)).collect();
         let pair = self.pair(body, &betas, garment.clone())?;
-        let to_f32 = |v: Vec<[f64; 3]>| v.into_iter().map(|p| p.map(|c| c as f32)).collect();
-        let (mut coarse, mut refined) = (Vec::new(), Vec::new());
-        for (pose, trans) in clip.poses.iter().zip(clip.trans) {
-            let frame = pair.body_frame(body, pose, trans.map(f64::from))?;
-            let p = self.predict(&pair, &frame)?;
-            coarse.push(to_f32(p.coarse));
-            refined.push(to_f32(p.refined));
-        }
-        Ok((coarse, refined))
+        let (model, stats, device) = (&self.model, &self.stats, &self.device);
+        clip.poses
+            .iter()
+            .zip(clip.trans)
+            .map(|(pose, trans)| {
+                let frame = pair.body_frame(body, pose, trans.map(f64::from))?;
+                let mut garment = coarse_garment(model, stats, &pair, &frame, device)?;
+                if refined {
+                    garment = refined_garment(model, stats, &pair, &frame, &garment, device)?;
+                }
+                Ok(garment.into_iter().map(|p| p.map(|c| c as f32)).collect())
+            })
+            .collect()
     }
 
     /// The coarse regressor alone as a [`Deformer`] (Tables 4.1–4.2's "Coarse" column).
@@ -319,7 +326,7 @@ impl Deformer for GarFitPredictor {
         body: &BodyModel,
         clip: &Clip,
     ) -> Result<Frames, ModelError> {
-        Ok(self.animate_both(garment, body, clip)?.1)
+        self.animate_stage(garment, body, clip, true)
     }
 }
 
@@ -345,6 +352,6 @@ impl Deformer for CoarseStage<'_> {
         body: &BodyModel,
         clip: &Clip,
     ) -> Result<Frames, ModelError> {
-        Ok(self.0.animate_both(garment, body, clip)?.0)
+        self.0.animate_stage(garment, body, clip, false)
     }
 }

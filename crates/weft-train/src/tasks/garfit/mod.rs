@@ -26,7 +26,9 @@ use burn::tensor::{Device, Tensor, TensorData};
 use weft_body::BodyModel;
 use weft_data::{Dataset, Split};
 use weft_mesh::rng::SplitMix64;
-use weft_models::garfitnet::predictor::{coarse_correction, refine_correction, values};
+use weft_models::garfitnet::predictor::{
+    coarse_correction, coarse_garment, refine_correction, refined_garment,
+};
 use weft_models::garfitnet::{
     coarse_target, fit_sample, BodyFrame, FactorAnalysis, FitPair, GarFit, GarFitConfig,
     GarFitStats, PairFit, STATS_FILE,
@@ -332,8 +334,13 @@ impl GarFitTask {
             .iter()
             .map(|f| {
                 let pair = &split.pairs[f.pair];
-                let c = coarse_correction(model, &self.stats, &[(pair, &f.body)], &self.device)?;
-                Ok(pair.coarse_positions(&f.body, &values(c.vector())?))
+                Ok(coarse_garment(
+                    model,
+                    &self.stats,
+                    pair,
+                    &f.body,
+                    &self.device,
+                )?)
             })
             .collect()
     }
@@ -428,8 +435,8 @@ impl TrainTask for GarFitTask {
             let mut sum = 0.0;
             for (f, c) in self.validation.frames.iter().zip(&coarse) {
                 let pair = &self.validation.pairs[f.pair];
-                let d = refine_correction(model, &self.stats, &[(pair, &f.body, c)], &self.device)?;
-                sum += mean_error_cm(&pair.refined_positions(c, &values(d.vector())?), &f.truth);
+                let refined = refined_garment(model, &self.stats, pair, &f.body, c, &self.device)?;
+                sum += mean_error_cm(&refined, &f.truth);
             }
             let refined = sum / n;
             metrics.insert(REFINED_ERROR_CM.to_string(), refined);
