@@ -9,6 +9,8 @@
 //! - [`adjacency`]: the destination-major adjacency (self-loops, transpose) GAT runs on.
 //! - [`backend`]: the devices (flex CPU by default; wgpu / cuda behind features).
 //! - [`activation`]: the nonlinearities the papers name.
+//! - [`graph_net`]: message passing over typed edge sets (MeshGraphNets' block, HOOD's
+//!   multi-level [`Processor`] schedule, seed 004).
 //! - [`mlp`], [`lstm`]: MLP (with optional batch norm) and stacked LSTM encoders.
 //! - [`multires`]: seed 001's multi-resolution module ([`MultiResGModule`]: a dense GAT
 //!   branch beside a pooled one), MultiResGNet's core and GarFitNet's branches.
@@ -30,6 +32,7 @@ pub mod dense;
 pub mod error;
 mod flex;
 pub mod gat;
+pub mod graph_net;
 pub mod infer;
 pub mod init;
 pub mod lstm;
@@ -50,6 +53,7 @@ pub use batch::{BatchLevel, GraphBatch, HierarchyBatch};
 pub use dense::{DenseGatModule, DenseGatModuleConfig, NormedGat, NormedGatConfig};
 pub use error::{NnError, Result};
 pub use gat::{AttentionImpl, GatBlock, GatBlockConfig, HeadMerge};
+pub use graph_net::{EdgeSet, GraphNetBlock, GraphNetBlockConfig, Processor, ProcessorConfig};
 pub use lstm::{LstmEncoder, LstmEncoderConfig};
 pub use mlp::{Mlp, MlpConfig};
 pub use multires::{GlobalBranch, MultiResGModule, MultiResGModuleConfig};

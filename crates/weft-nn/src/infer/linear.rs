@@ -1,12 +1,12 @@
 //! The per-channel epilogue (bias, batch normalisation, σ) and the linear layers and MLPs
 //! that use it.
 
-use burn::nn::{BatchNorm, Linear};
+use burn::nn::{BatchNorm, LayerNorm, Linear};
 use rayon::prelude::*;
 
 use super::{host, math, matmul, Columns, Features, BLOCK};
 use crate::activation::Activation;
-use crate::mlp::Mlp;
+use crate::mlp::{Mlp, LAYER_NORM_EPSILON};
 use crate::real::simd;
 
 /// `σ(x · scale + shift)` per channel: a layer's bias `b` and its batch normalisation at
@@ -127,10 +127,54 @@ impl InferLinear {
     }
 }
 
-/// An [`Mlp`] as [`InferLinear`] layers.
+/// Layer normalisation of each row, `γ (x − μ) / √(σ² + ε) + β` with the row's mean and
+/// biased variance (burn's `layer_norm`), computed in f64 per row.
+#[derive(Clone, Debug)]
+struct RowNorm {
+    gamma: Vec<f32>,
+    beta: Vec<f32>,
+    epsilon: f64,
+}
+
+impl RowNorm {
+    fn new(norm: &LayerNorm) -> Self {
+        let gamma = host(norm.gamma.val());
+        let beta = norm
+            .beta
+            .as_ref()
+            .map_or_else(|| vec![0.0; gamma.len()], |b| host(b.val()));
+        RowNorm {
+            gamma,
+            beta,
+            epsilon: LAYER_NORM_EPSILON,
+        }
+    }
+
+    fn apply_rows(&self, x: &mut Features) {
+        let w = x.width;
+        assert_eq!(self.gamma.len(), w, "layer norm of {w} channels");
+        x.data.par_chunks_mut(BLOCK * w).for_each(|rows| {
+            for row in rows.chunks_exact_mut(w) {
+                let mean = row.iter().map(|&v| f64::from(v)).sum::<f64>() / w as f64;
+                let var = row
+                    .iter()
+                    .map(|&v| (f64::from(v) - mean).powi(2))
+                    .sum::<f64>()
+                    / w as f64;
+                let inv = 1.0 / (var + self.epsilon).sqrt();
+                for ((v, g), b) in row.iter_mut().zip(&self.gamma).zip(&self.beta) {
+                    *v = ((f64::from(*v) - mean) * inv) as f32 * g + b;
+                }
+            }
+        });
+    }
+}
+
+/// An [`Mlp`] as [`InferLinear`] layers, then its output layer normalisation, if any.
 #[derive(Clone, Debug)]
 pub struct InferMlp {
     layers: Vec<InferLinear>,
+    layer_norm: Option<RowNorm>,
 }
 
 impl From<&Mlp> for InferMlp {
@@ -149,7 +193,10 @@ impl From<&Mlp> for InferMlp {
                 InferLinear::new(layer, mlp.norms.get(k), activation)
             })
             .collect();
-        InferMlp { layers }
+        InferMlp {
+            layers,
+            layer_norm: mlp.layer_norm.as_ref().map(RowNorm::new),
+        }
     }
 }
 
@@ -170,6 +217,9 @@ impl InferMlp {
         let mut h = self.layers[0].forward_columns(x.columns(0..x.width));
         for layer in &self.layers[1..] {
             h = layer.forward_columns(h.columns(0..h.width));
+        }
+        if let Some(norm) = &self.layer_norm {
+            norm.apply_rows(&mut h);
         }
         Ok(h)
     }

@@ -47,10 +47,11 @@ fn assert_close(got: &Features, want: Tensor<2>, what: &str) {
 fn mlp_equals_the_layer() {
     let mut rng = Rng::new(1);
     let (f, x) = input(&mut rng, 70, 7);
-    for batch_norm in [true, false] {
+    for (batch_norm, layer_norm) in [(true, false), (false, false), (false, true)] {
         for activation in [Activation::Tanh, Activation::Relu] {
             let mlp = MlpConfig::new(7, vec![16, 9, 4])
                 .with_batch_norm(batch_norm)
+                .with_layer_norm(layer_norm)
                 .with_activation(activation)
                 .with_output_activation(Activation::None)
                 .init(&device())
@@ -58,7 +59,8 @@ fn mlp_equals_the_layer() {
                 .map(&mut Statistics);
             let fast = InferMlp::from(&mlp);
             assert_eq!((fast.input_width(), fast.output_width()), (7, 4));
-            let what = format!("MLP, batch norm {batch_norm}, {activation:?}");
+            let what =
+                format!("MLP, batch norm {batch_norm}, layer norm {layer_norm}, {activation:?}");
             assert_close(
                 &fast.forward(&f).unwrap(),
                 mlp.forward(x.clone()).unwrap(),
