@@ -33,6 +33,8 @@
 //! they open again; a hinge folded through ±π is measured with the difference
 //! `θ − θ̄` wrapped into (−π, π] so the energy stays continuous there.
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use rayon::prelude::*;
 use weft_mesh::{Hinge, Topology, TriMesh};
@@ -74,11 +76,12 @@ struct HingeData {
     rest_angle: f64,
 }
 
-/// Dihedral-angle bending energy of a garment.
+/// Dihedral-angle bending energy of a garment. The hinges are shared (`Arc`), so a clone
+/// is cheap: a [`crate::ClothModel`] hands one to every step's potential.
 #[derive(Clone, Debug)]
 pub struct Bending {
     vertex_count: usize,
-    hinges: Vec<HingeData>,
+    hinges: Arc<[HingeData]>,
 }
 
 type V12 = SVector<f64, 12>;
@@ -154,7 +157,7 @@ impl Bending {
         }
         Ok(Bending {
             vertex_count: n,
-            hinges: out,
+            hinges: out.into(),
         })
     }
 
@@ -427,7 +430,7 @@ impl Energy for Bending {
     }
 
     fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
-        for h in &self.hinges {
+        for h in self.hinges.iter() {
             f(&h.verts);
         }
     }

@@ -8,6 +8,11 @@
 //! positions is one implicit-Euler step, and its value is HOOD's self-supervised loss.
 //! Seed 000's unsupervised losses (supplement eq. 4–8) are in [`penalties`].
 //!
+//! A garment's physics (rest shape, per-face, per-hinge and per-vertex materials,
+//! masses, options) is a [`ClothModel`]; its [`ClothModel::step_potential`] is the one
+//! builder of a step's potential, used by the simulator ([`ClothSimulator`]) and by
+//! HOOD's loss alike. HOOD's training materials: [`hood_material`].
+//!
 //! Every energy implements [`Energy`]: value, gradient, and a Hessian, exact or
 //! projected to positive semi-definite per element ([`HessianKind`]), scattered into a
 //! 3×3-block sparse matrix ([`BlockCsr`]) whose product and diagonal blocks feed
@@ -23,6 +28,7 @@
 pub mod attachment;
 pub mod bending;
 pub mod body;
+pub mod cloth;
 pub mod collision;
 pub mod contact;
 pub mod elastic_skin;
@@ -30,6 +36,7 @@ pub mod energy;
 pub mod error;
 pub mod friction;
 pub mod gravity;
+pub mod hood_material;
 pub mod inertia;
 pub mod material;
 mod math;
@@ -47,6 +54,7 @@ mod fd_tests;
 pub use attachment::{Attachment, SkinAnchors};
 pub use bending::{Bending, BendingScale, RestAngle};
 pub use body::{check_garment_gap, Penetration, PosedBody, MAX_GARMENT_GAP};
+pub use cloth::{ClothModel, StepContacts, StepInputs};
 pub use collision::CubicCollision;
 pub use contact::{BodyContact, BodyProximity, Plane, Sphere, VertexContact};
 pub use elastic_skin::{ConeVolume, ElasticSkin, ElasticSkinParams, ElasticSkinReport};
@@ -54,6 +62,10 @@ pub use energy::{gradient_of, hessian_of, hessian_pattern_of, Energy, HessianKin
 pub use error::SimError;
 pub use friction::{Friction, FrictionContact};
 pub use gravity::{lumped_masses, Gravity, STANDARD_GRAVITY};
+pub use hood_material::{
+    hood_inputs, sample_hood_material, MaterialSampler, HOOD_BENDING_RANGE, HOOD_DENSITY_RANGE,
+    HOOD_LAMBDA_RANGE, HOOD_MU_RANGE,
+};
 pub use inertia::{inertial_target, Inertia};
 pub use material::Material;
 pub use membrane::RestFrames;

@@ -4,7 +4,8 @@
 //!
 //! The membrane is a thin sheet in plane stress, so the 2D Lamé parameters are
 //! `μ = E / (2(1 + ν))` and `λ = E ν / (1 − ν²)` (not the 3D `λ = Eν/((1+ν)(1−2ν))`,
-//! which diverges at `ν = ½`); the stretching energy multiplies the density by the
+//! which diverges at `ν = ½`; the plane-stress map holds for `0 <= ν < 1`, see
+//! [`Material::validate`]); the stretching energy multiplies the density by the
 //! thickness (HOOD's convention), so `E · thickness` is the membrane stiffness in N/m.
 //! Values and their sources are in `docs/physics.md`: HOOD's default material is exact
 //! (taken from their code); the fabric presets are approximate, order-of-magnitude
@@ -28,7 +29,8 @@ pub struct Material {
     pub density: f64,
     /// Young's modulus, Pa. Default: about 70 079 (from HOOD's `μ`, `λ`).
     pub young_modulus: f64,
-    /// Poisson's ratio, in [0, 0.5) (unitless). Default: about 0.4847 (from HOOD's `μ`, `λ`).
+    /// Poisson's ratio, in [0, 1) (unitless; the membrane's plane-stress ratio, see
+    /// [`Material::validate`]). Default: about 0.4847 (from HOOD's `μ`, `λ`).
     pub poisson_ratio: f64,
     /// Shell thickness, m. Default: 4.7·10⁻⁴ (0.47 mm).
     pub thickness: f64,
@@ -198,8 +200,15 @@ impl Material {
         }
     }
 
-    /// Checks every value: positive density, modulus and thickness, `0 <= ν < 0.5`,
+    /// Checks every value: positive density, modulus and thickness, `0 <= ν < 1`,
     /// non-negative bending and friction, all finite.
+    ///
+    /// `ν` is the plane-stress ratio of the membrane: `0 <= ν < 1` is exactly `μ > 0`,
+    /// `λ >= 0` ([`lame_plane_stress`]; `ν = λ/(λ + 2μ)`), where the StVK membrane energy
+    /// is positive definite. `ν >= ½` (`λ >= 2μ`) has no isotropic 3D solid behind it, but
+    /// woven fabrics measure in-plane ratios above ½, and HOOD's training materials
+    /// (`μ` down to 15 909 Pa, `λ` up to 93 334 Pa, [`crate::hood_material`]) reach
+    /// `ν ≈ 0.75`.
     pub fn validate(&self) -> Result<(), SimError> {
         let name = self.name;
         check_nonneg(|| format!("{name} density"), self.density, true)?;
@@ -215,11 +224,11 @@ impl Material {
             false,
         )?;
         check_nonneg(|| format!("{name} friction"), self.friction, false)?;
-        if !(self.poisson_ratio >= 0.0 && self.poisson_ratio < 0.5) {
+        if !(self.poisson_ratio >= 0.0 && self.poisson_ratio < 1.0) {
             return Err(SimError::InvalidParameter {
                 what: format!("{name} Poisson's ratio"),
                 value: self.poisson_ratio,
-                expected: "expected 0 <= ν < 0.5",
+                expected: "expected 0 <= ν < 1",
             });
         }
         Ok(())
@@ -303,10 +312,24 @@ mod tests {
         assert!((mu - 23_600.0).abs() < 1e-8 && (lambda - 44_400.0).abs() < 1e-8);
     }
 
+    /// The corner of HOOD's training range with the largest `λ/μ` (ν ≈ 0.75 in plane
+    /// stress) is a valid material and keeps its Lamé parameters.
+    #[test]
+    fn hoods_softest_corner_is_valid() {
+        let (mu, lambda) = (15_909.0, 93_333.74);
+        let m = Material::from_lame("custom", 0.2, mu, lambda, 4.7e-4, 1e-6, 0.5);
+        m.validate().unwrap();
+        assert!(m.poisson_ratio > 0.74 && m.poisson_ratio < 0.75, "{m:?}");
+        let (mu2, lambda2) = m.lame();
+        assert!((mu2 - mu).abs() < 1e-9 * mu && (lambda2 - lambda).abs() < 1e-9 * lambda);
+    }
+
     #[test]
     fn bad_values_are_rejected() {
         let mut m = Material::cotton();
-        m.poisson_ratio = 0.5;
+        m.poisson_ratio = 1.0;
+        assert!(m.validate().is_err());
+        m.poisson_ratio = -0.1;
         assert!(m.validate().is_err());
         m = Material::cotton();
         m.density = 0.0;

@@ -13,6 +13,8 @@
 //! `dE = ½(dFᵀF + FᵀdF)`. The exact Hessian is indefinite under compression (`E` with
 //! negative eigenvalues); [`crate::HessianKind::Projected`] clamps each face's 9×9 block.
 
+use std::sync::Arc;
+
 use nalgebra::{Matrix2, Matrix3x2};
 use weft_mesh::TriMesh;
 
@@ -30,16 +32,28 @@ pub struct StretchParams {
     pub thickness: f64,
 }
 
-/// StVK stretching energy of a garment.
+/// StVK stretching energy of a garment. The rest frames and parameters are shared
+/// (`Arc`), so a clone is cheap: a [`crate::ClothModel`] hands one to every step's
+/// potential.
 #[derive(Clone, Debug)]
 pub struct Stretch {
-    frames: RestFrames,
-    params: Vec<StretchParams>,
+    frames: Arc<RestFrames>,
+    params: Arc<[StretchParams]>,
 }
 
 impl Stretch {
     /// One parameter set per face of `frames`. `μ > 0`, `λ >= 0`, thickness `> 0`.
     pub fn new(frames: RestFrames, params: Vec<StretchParams>) -> Result<Self, SimError> {
+        Self::on_frames(Arc::new(frames), params)
+    }
+
+    /// The same rest frames (shared, not copied) with other per-face parameters, as
+    /// [`Stretch::new`] checks them.
+    pub fn with_params(&self, params: Vec<StretchParams>) -> Result<Self, SimError> {
+        Self::on_frames(Arc::clone(&self.frames), params)
+    }
+
+    fn on_frames(frames: Arc<RestFrames>, params: Vec<StretchParams>) -> Result<Self, SimError> {
         check_count(
             "stretch parameters",
             "face",
@@ -51,7 +65,10 @@ impl Stretch {
             check_nonneg(|| format!("face {f} lambda"), p.lambda, false)?;
             check_nonneg(|| format!("face {f} thickness"), p.thickness, true)?;
         }
-        Ok(Stretch { frames, params })
+        Ok(Stretch {
+            frames,
+            params: params.into(),
+        })
     }
 
     /// The same parameters on every face, rest frames from the rest mesh.

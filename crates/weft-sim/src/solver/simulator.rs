@@ -1,32 +1,30 @@
 //! The time loop of the cloth simulator: one implicit-Euler step per call, minimising
 //! the incremental potential (seed 004 eq. 5) with [`super::minimize`].
 //!
-//! Per step: the inertial target `x̂ = x_t + h v_t`; body contacts refreshed from the
-//! start-of-step positions (HOOD: the closest body point of each garment vertex at the
-//! start of the step, with the body at its end-of-step state), each vertex within
-//! `contact_radius` of the body getting a cubic collision contact and, within HOOD's
-//! friction radius, a friction contact with HOOD's lagged normal force `m g`; pinned
-//! vertices held at their targets; the new velocity `(x_{t+1} − x_t)/h`. A step that
-//! produces non-finite positions or an absurd speed is reported as
-//! [`SimError::Diverged`] and leaves the state as it was.
+//! Per step: the inertial target `x̂ = x_t + h v_t`; the step's potential from the
+//! garment's [`ClothModel`] ([`ClothModel::step_potential`], the same potential a
+//! network's loss uses), with body contacts from the start-of-step positions (HOOD: the
+//! closest body point of each garment vertex at the start of the step, with the body at
+//! its end-of-step state), each vertex within `contact_radius` of the body getting a
+//! cubic collision contact and, within HOOD's friction radius, a friction contact with
+//! HOOD's lagged normal force `m g`; pinned vertices held at their targets; the new
+//! velocity `(x_{t+1} − x_t)/h`. A step that produces non-finite positions or an absurd
+//! speed is reported as [`SimError::Diverged`] and leaves the state as it was.
 
 use weft_mesh::TriMesh;
 
-use crate::bending::{Bending, BendingScale, RestAngle};
-use crate::collision::{CubicCollision, HOOD_COLLISION_EPS, HOOD_COLLISION_STIFFNESS};
-use rayon::prelude::*;
-
-use crate::contact::{BodyContact, BodyProximity, VertexContact};
+use crate::bending::{BendingScale, RestAngle};
+use crate::cloth::{ClothModel, StepInputs};
+use crate::collision::{HOOD_COLLISION_EPS, HOOD_COLLISION_STIFFNESS};
+use crate::contact::BodyProximity;
 use crate::error::{check_len, check_nonneg, check_vertex, SimError};
-use crate::friction::{Friction, FrictionContact, DEFAULT_FRICTION_EPS, HOOD_FRICTION_RADIUS};
-use crate::gravity::{lumped_masses, Gravity, STANDARD_GRAVITY};
-use crate::inertia::Inertia;
+use crate::friction::{DEFAULT_FRICTION_EPS, HOOD_FRICTION_RADIUS};
+use crate::gravity::STANDARD_GRAVITY;
 use crate::material::Material;
 use crate::math::{finite3, v3};
-use crate::potential::{IncrementalPotential, Term};
+use crate::potential::IncrementalPotential;
 use crate::solver::newton::{minimize, NewtonOptions, NewtonReport};
 use crate::sparse::BlockCsr;
-use crate::stretch::Stretch;
 
 /// Simulator parameters (defaults: HOOD's contact parameters, standard gravity). A TOML
 /// table sets any of them; the others keep the defaults stated on each field.
@@ -88,78 +86,55 @@ pub struct StepReport {
     pub max_speed: f64,
 }
 
-/// A garment simulated with implicit Euler.
+/// A garment simulated with implicit Euler. Its physics is a [`ClothModel`], and each
+/// step minimises the model's [`ClothModel::step_potential`].
 #[derive(Debug)]
 pub struct ClothSimulator {
+    model: ClothModel,
     potential: IncrementalPotential,
     hess: BlockCsr,
-    masses: Vec<f64>,
     x: Vec<[f64; 3]>,
     v: Vec<[f64; 3]>,
     pinned: Vec<bool>,
     pin_targets: Vec<[f64; 3]>,
-    options: SimOptions,
-    material: Material,
 }
 
 impl ClothSimulator {
     /// A simulator for the garment `rest` (rest shape = initial state, at rest) made of
     /// `material`.
     pub fn new(rest: &TriMesh, material: &Material, options: SimOptions) -> Result<Self, SimError> {
-        material.validate()?;
-        let n = rest.vertex_count();
-        let masses = lumped_masses(rest, &vec![material.density; rest.face_count()])?;
-        let potential = IncrementalPotential::new(n)
-            .with(
-                1.0,
-                Term::Stretch(Stretch::uniform(rest, material.stretch_params())?),
-            )?
-            .with(
-                1.0,
-                Term::Bending(Bending::uniform(
-                    rest,
-                    material.bending_stiffness,
-                    options.bending_scale,
-                    options.rest_angle,
-                )?),
-            )?
-            .with(
-                1.0,
-                Term::Gravity(Gravity::new(masses.clone(), options.gravity)?),
-            )?
-            .with(
-                1.0,
-                Term::Inertia(Inertia::new(
-                    masses.clone(),
-                    1.0 / 30.0,
-                    rest.positions.clone(),
-                )?),
-            )?
-            .with(
-                1.0,
-                Term::Collision(CubicCollision::new(
-                    n,
-                    options.collision_stiffness,
-                    options.collision_eps,
-                    Vec::new(),
-                )?),
-            )?
-            .with(
-                1.0,
-                Term::Friction(Friction::new(n, options.friction_eps, Vec::new())?),
-            )?;
+        Self::from_model(ClothModel::uniform(rest, material, options)?)
+    }
+
+    /// A simulator for the garment of `model` (e.g. one material per vertex), starting
+    /// at its rest shape, at rest.
+    pub fn from_model(model: ClothModel) -> Result<Self, SimError> {
+        let n = model.vertex_count();
+        let x = model.rest().positions.clone();
+        let pinned = vec![false; n];
+        let potential = model.step_potential(&StepInputs {
+            start: &x,
+            target: &x,
+            dt: 1.0 / 30.0,
+            pinned: &pinned,
+            body: None,
+            collision_stiffness: None,
+        })?;
         let hess = potential.hessian_pattern();
         Ok(ClothSimulator {
+            model,
             potential,
             hess,
-            masses,
-            x: rest.positions.clone(),
+            pin_targets: x.clone(),
+            x,
             v: vec![[0.0; 3]; n],
-            pinned: vec![false; n],
-            pin_targets: rest.positions.clone(),
-            options,
-            material: *material,
+            pinned,
         })
+    }
+
+    /// The garment's physics.
+    pub fn model(&self) -> &ClothModel {
+        &self.model
     }
 
     /// Current positions.
@@ -174,7 +149,7 @@ impl ClothSimulator {
 
     /// Lumped vertex masses.
     pub fn masses(&self) -> &[f64] {
-        &self.masses
+        self.model.masses()
     }
 
     /// The incremental potential (with the last step's inertial target and contacts).
@@ -241,23 +216,20 @@ impl ClothSimulator {
                 }
             })
             .collect();
-        let (contacts, friction, moved) = self.contacts(body);
-        let (nc, nf) = (contacts.len(), friction.len());
-        if let Some(inertia) = self.potential.inertia_mut() {
-            inertia.set_dt(dt)?;
-            inertia.set_target(target.clone())?;
-        }
-        if let Some(c) = self.potential.collision_mut() {
-            c.set_contacts(contacts)?;
-        }
-        if let Some(f) = self.potential.friction_mut() {
-            f.set_contacts(friction)?;
-        }
+        self.potential = self.model.step_potential(&StepInputs {
+            start: &self.x,
+            target: &target,
+            dt,
+            pinned: &self.pinned,
+            body,
+            collision_stiffness: None,
+        })?;
+        let nc = self.potential.collision().map_or(0, |c| c.contacts().len());
+        let nf = self.potential.friction().map_or(0, |f| f.contacts().len());
         // Start from the inertial target; where it lies closer to the body than ε
         // (along the contact's normal), from its projection to ε instead. Keeping the
         // tangential part keeps the start free of the stretch a jump between contact
         // and free vertices would cause.
-        let _ = moved;
         let mut x = target;
         if let Some(c) = self.potential.collision() {
             let eps = c.eps();
@@ -274,7 +246,7 @@ impl ClothSimulator {
             &mut x,
             &self.pinned,
             &mut self.hess,
-            &self.options.newton,
+            &self.model.options().newton,
         )?;
         let mut max_speed: f64 = 0.0;
         let mut v = vec![[0.0; 3]; n];
@@ -287,11 +259,11 @@ impl ClothSimulator {
             v[i] = std::array::from_fn(|k| (x[i][k] - self.x[i][k]) / dt);
             max_speed = max_speed.max(v3(v[i]).norm());
         }
-        if max_speed > self.options.max_speed {
+        let limit = self.model.options().max_speed;
+        if max_speed > limit {
             return Err(SimError::Diverged {
                 message: format!(
-                    "largest vertex speed {max_speed:.3e} m/s exceeds {:.3e} m/s",
-                    self.options.max_speed
+                    "largest vertex speed {max_speed:.3e} m/s exceeds {limit:.3e} m/s"
                 ),
             });
         }
@@ -303,59 +275,6 @@ impl ClothSimulator {
             friction_contacts: nf,
             max_speed,
         })
-    }
-
-    /// Collision and friction contacts of the free vertices at the start of the step
-    /// (queried in parallel: with a refit per sub-step this is a large share of a
-    /// step's cost), and each contact's body displacement over the step.
-    fn contacts(
-        &self,
-        body: Option<&(dyn BodyProximity + Sync)>,
-    ) -> (Vec<VertexContact>, Vec<FrictionContact>, Vec<[f64; 3]>) {
-        let Some(body) = body else {
-            return (Vec::new(), Vec::new(), Vec::new());
-        };
-        let g = v3(self.options.gravity).norm();
-        let found: Vec<(u32, BodyContact, [f64; 3])> = self
-            .x
-            .par_iter()
-            .enumerate()
-            .filter(|(i, _)| !self.pinned[*i])
-            .filter_map(|(i, &p)| {
-                let (c, moved) = body.closest_moving(p)?;
-                (finite3(c.point) && finite3(c.normal) && finite3(moved))
-                    .then_some((i as u32, c, moved))
-            })
-            .collect();
-        let mut contacts = Vec::new();
-        let mut friction = Vec::new();
-        let mut moved = Vec::new();
-        for (i, c, m) in found {
-            let p = self.x[i as usize];
-            let d = c.signed_distance(p);
-            if d < self.options.contact_radius {
-                contacts.push(VertexContact {
-                    vertex: i,
-                    contact: c,
-                });
-                moved.push(m);
-            }
-            if d < self.options.friction_radius && self.material.friction > 0.0 {
-                let before: [f64; 3] = std::array::from_fn(|k| c.point[k] - m[k]);
-                friction.push(FrictionContact::hood(
-                    i,
-                    p,
-                    before,
-                    c.point,
-                    c.normal,
-                    c.normal,
-                    self.masses[i as usize],
-                    g,
-                    self.material.friction,
-                ));
-            }
-        }
-        (contacts, friction, moved)
     }
 }
 
