@@ -203,6 +203,7 @@ mod tests {
             activation: Activation::Tanh,
             output_activation: Activation::None,
             batch_norm: false,
+            layer_norm: false,
         }
         .init(&device)
         .unwrap();

@@ -22,7 +22,7 @@ pub use error::MeshError;
 pub use geodesic::{GeodesicError, Geodesics};
 pub use graph::{Bfs, Components, Graph, UNREACHED};
 pub use io::{load_mesh, read_mesh, write_mesh, LoadReport, MeshFormat};
-pub use mesh::{Aabb, TriMesh};
+pub use mesh::{vertex_normals_of, Aabb, TriMesh};
 pub use nystrom::{farthest_point_sampling, NystromError, NystromSpectrum};
 pub use topology::{Hinge, Topology};
 pub use validate::{Finding, Severity};

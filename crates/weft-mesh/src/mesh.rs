@@ -81,14 +81,7 @@ impl TriMesh {
     /// Area-weighted unit vertex normals: the sum of the incident faces' twice-area
     /// vectors, normalised. Zero for isolated vertices.
     pub fn vertex_normals(&self) -> Vec<[f64; 3]> {
-        let mut acc = vec![[0.0; 3]; self.positions.len()];
-        for &f in &self.faces {
-            let n = self.face_cross(f);
-            for i in f {
-                acc[i as usize] = add(acc[i as usize], n);
-            }
-        }
-        acc.into_iter().map(normalize_or_zero).collect()
+        vertex_normals_of(&self.positions, &self.faces)
     }
 
     /// Each undirected edge once as `[a, b]`, `a < b`, sorted ascending.
@@ -137,6 +130,20 @@ impl TriMesh {
     pub fn graph(&self) -> Graph {
         Graph::from_edges(self.positions.len(), &self.edges())
     }
+}
+
+/// [`TriMesh::vertex_normals`] of `positions` over `faces`, for a mesh whose vertices
+/// move every frame (a rollout, a posed body) without building a [`TriMesh`] each time.
+pub fn vertex_normals_of(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<[f64; 3]> {
+    let mut acc = vec![[0.0; 3]; positions.len()];
+    for f in faces {
+        let [a, b, c] = f.map(|i| positions[i as usize]);
+        let n = cross(sub(b, a), sub(c, a));
+        for &i in f {
+            acc[i as usize] = add(acc[i as usize], n);
+        }
+    }
+    acc.into_iter().map(normalize_or_zero).collect()
 }
 
 #[cfg(test)]

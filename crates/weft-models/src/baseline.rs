@@ -14,7 +14,7 @@
 use std::collections::BTreeMap;
 
 use rayon::prelude::*;
-use weft_body::features::transfer_weights;
+use weft_body::features::{transfer_weights, transfer_weights_diffused, DiffusionParams};
 use weft_body::skinning::{skin, SkinWeights};
 use weft_body::{BodyModel, ShapedBody, Skinning};
 use weft_mesh::TriMesh;
@@ -45,6 +45,26 @@ impl SkinnedGarment {
     /// be in that same rest pose (a dataset's rest garment, or a garment fitted to the
     /// body).
     pub fn new(garment: &TriMesh, body: &BodyModel, betas: &[f32]) -> Result<Self, ModelError> {
+        Self::bind(garment, body, betas, false)
+    }
+
+    /// [`SkinnedGarment::new`] with the transferred weights diffused over the garment
+    /// (weft-body's `transfer_weights_diffused`): a loose skirt's hem blends both legs and
+    /// the pelvis instead of tearing between them. HOOD starts its rollouts from this.
+    pub fn diffused(
+        garment: &TriMesh,
+        body: &BodyModel,
+        betas: &[f32],
+    ) -> Result<Self, ModelError> {
+        Self::bind(garment, body, betas, true)
+    }
+
+    fn bind(
+        garment: &TriMesh,
+        body: &BodyModel,
+        betas: &[f32],
+        diffused: bool,
+    ) -> Result<Self, ModelError> {
         let betas: Vec<f64> = betas.iter().map(|&b| f64::from(b)).collect();
         let shaped = body.shaped(&betas).map_err(body_err("shaping the body"))?;
         let surface = body
@@ -60,8 +80,12 @@ impl SkinnedGarment {
         let weights = body
             .skinning_weights()
             .map_err(feature("the body's skinning weights"))?;
-        let t = transfer_weights(&surface, &weights, &garment.positions)
-            .map_err(feature("transferring skinning weights to the garment"))?;
+        let t = if diffused {
+            transfer_weights_diffused(&surface, &weights, garment, &DiffusionParams::default())
+        } else {
+            transfer_weights(&surface, &weights, &garment.positions)
+        }
+        .map_err(feature("transferring skinning weights to the garment"))?;
         Ok(SkinnedGarment {
             rest: garment.positions.clone(),
             weights: SkinWeights::from_dense(t.weights.as_slice(), t.weights.joint_count()),

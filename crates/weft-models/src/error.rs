@@ -84,6 +84,15 @@ pub enum ModelError {
         /// The cause, with its line and column.
         message: String,
     },
+    /// A rollout that left the physically possible (a non-finite position, a vertex
+    /// faster than the guard allows).
+    #[error("the rollout diverged at frame {frame}: {message}")]
+    Diverged {
+        /// The first frame that could not be produced.
+        frame: usize,
+        /// What happened.
+        message: String,
+    },
     /// A run's config.toml naming a model this build does not know.
     #[error("{}: model_kind", path.display())]
     RunKind {

@@ -1,6 +1,5 @@
 //! [`ModelKind`]: the learned systems weft knows by name, so a run directory, a config
-//! file and the command line can say which one they mean (and refuse one that is not
-//! built yet instead of pretending to run it).
+//! file and the command line can say which one they mean.
 
 use std::fmt;
 use std::str::FromStr;
@@ -42,18 +41,6 @@ impl ModelKind {
             ModelKind::MultiResGnet => "multiresgnet",
             ModelKind::GarFitNet => "garfitnet",
         }
-    }
-
-    /// Whether this build can train and run the kind; callers refuse the others with a
-    /// clear message instead of stubbing them.
-    pub fn is_implemented(self) -> bool {
-        matches!(
-            self,
-            ModelKind::Multilevel
-                | ModelKind::DenseGats
-                | ModelKind::MultiResGnet
-                | ModelKind::GarFitNet
-        )
     }
 }
 
@@ -105,19 +92,6 @@ mod tests {
         assert!(
             e.contains("`multi`") && e.contains("multilevel, hood, densegats"),
             "{e}"
-        );
-        let implemented: Vec<_> = ModelKind::ALL
-            .into_iter()
-            .filter(|k| k.is_implemented())
-            .collect();
-        assert_eq!(
-            implemented,
-            [
-                ModelKind::Multilevel,
-                ModelKind::DenseGats,
-                ModelKind::MultiResGnet,
-                ModelKind::GarFitNet
-            ]
         );
     }
 }

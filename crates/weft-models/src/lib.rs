@@ -6,6 +6,7 @@
 //! - [`refine`]: seed 001's learned refinement of skinning (case 1: dressed characters),
 //!   shared by [`densegats`] (DenseGATs, §3.2) and [`multiresgnet`] (MultiResGNet, §3.3);
 //! - [`garfitnet`]: seed 001's fit-aware garment refinement (case 2, ch. 4);
+//! - [`hood`]: HOOD (seed 004), cloth dynamics learned from the incremental potential;
 //! - [`multilevel`]: the Multilevel model of seed 000 (multi-source garment graph,
 //!   structure-preserving pooling, temporal skinning weights and blend shapes, LBS);
 //! - [`kind`]: [`ModelKind`], the systems by name;
@@ -16,6 +17,7 @@ pub mod deformer;
 pub mod densegats;
 pub mod error;
 pub mod garfitnet;
+pub mod hood;
 pub mod kind;
 pub mod load;
 pub mod multilevel;

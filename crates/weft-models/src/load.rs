@@ -22,17 +22,6 @@ pub fn load_deformer(dir: &Path) -> Result<Box<dyn Deformer + Send>, ModelError>
         ModelKind::Multilevel => Ok(Box::new(Predictor::load(dir)?)),
         ModelKind::DenseGats | ModelKind::MultiResGnet => Ok(Box::new(RefinePredictor::load(dir)?)),
         ModelKind::GarFitNet => Ok(Box::new(GarFitPredictor::load(dir)?)),
-        other => Err(ModelError::Run {
-            path: dir.join("config.toml"),
-            message: format!(
-                "a run of model `{other}`, which this build of weft cannot run yet (it runs: {})",
-                ModelKind::ALL
-                    .iter()
-                    .filter(|k| k.is_implemented())
-                    .map(|k| k.name())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        }),
+        ModelKind::Hood => Ok(Box::new(crate::hood::HoodPredictor::load(dir)?)),
     }
 }

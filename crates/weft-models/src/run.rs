@@ -248,6 +248,14 @@ pub fn read_run_config(run_dir: &Path) -> Result<(RunHeader, toml::Table), Model
     Ok((header, table))
 }
 
+/// A JSON file a run keeps beside its checkpoints (normalisers, fitted statistics),
+/// parsed as `T`; errors name the file and say what it should have held (`what`).
+pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str) -> Result<T, ModelError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| run_err(path, format!("cannot read {what}: {e}")))?;
+    serde_json::from_str(&text).map_err(|e| run_err(path, format!("not {what}: {e}")))
+}
+
 /// The model record `RUN/checkpoints/latest` names; an error naming `latest` when the run
 /// has no checkpoint.
 pub fn latest_checkpoint(run_dir: &Path) -> Result<PathBuf, ModelError> {

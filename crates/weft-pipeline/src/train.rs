@@ -12,6 +12,7 @@ use weft_models::ModelKind;
 use weft_nn::backend::{cpu_autodiff, seeded};
 use weft_train::run_config::{ModelSettings, RunConfig, TaskSettings};
 use weft_train::tasks::garfit::{load_fit_data, save_stats, GarFitRun, GarFitTask};
+use weft_train::tasks::hood::{HoodRun, HoodTask};
 use weft_train::tasks::refine::config::{DenseGatsRun, MultiResGnetRun, RefineTraining};
 use weft_train::tasks::refine::{fit_normalizer, load_split, save_normalizer, RefineTask};
 use weft_train::{train, MultilevelRun, MultilevelTask, Outcome, RunOptions, TrainTask};
@@ -23,8 +24,8 @@ use crate::error::{stage, PipelineError};
 pub struct TrainSpec {
     /// The system to train.
     pub model: ModelKind,
-    /// Dataset directory (from `weft data generate`).
-    pub data: PathBuf,
+    /// Dataset directory (from `weft data generate`); HOOD trains without one.
+    pub data: Option<PathBuf>,
     /// Run directory to write.
     pub out: PathBuf,
     /// Preset name (default: the config file's, else `cpu`).
@@ -41,42 +42,24 @@ pub struct TrainSpec {
     pub progress: bool,
 }
 
-/// Refuses a model kind this build cannot train, naming the ones it can.
-pub fn check_implemented(kind: ModelKind) -> Result<(), PipelineError> {
-    if kind.is_implemented() {
-        return Ok(());
-    }
-    let built: Vec<&str> = ModelKind::ALL
-        .iter()
-        .filter(|k| k.is_implemented())
-        .map(|k| k.name())
-        .collect();
-    Err(PipelineError::Invalid(format!(
-        "model `{kind}` is not implemented in this build of weft yet; available: {}",
-        built.join(", ")
-    )))
-}
-
 /// The configuration of `kind` at `preset` (every default written out) as the
 /// config.toml a run would hold: what `weft config show` prints.
 pub fn preset_toml(kind: ModelKind, preset: &str) -> Result<String, PipelineError> {
-    check_implemented(kind)?;
     match kind {
         ModelKind::Multilevel => Ok(MultilevelRun::preset(preset)?.to_toml()?),
         ModelKind::DenseGats => Ok(DenseGatsRun::preset(preset)?.to_toml()?),
         ModelKind::MultiResGnet => Ok(MultiResGnetRun::preset(preset)?.to_toml()?),
         ModelKind::GarFitNet => Ok(GarFitRun::preset(preset)?.to_toml()?),
-        _ => unreachable!("refused by check_implemented"),
+        ModelKind::Hood => Ok(HoodRun::preset(preset)?.to_toml()?),
     }
 }
 
 /// Trains `spec.model`; `log` gets a line describing the run before it starts.
 pub fn train_run(spec: &TrainSpec, log: &mut dyn FnMut(&str)) -> Result<Outcome, PipelineError> {
-    check_implemented(spec.model)?;
     match spec.model {
         ModelKind::Multilevel => {
             let cfg = resolve_multilevel(spec)?;
-            train_multilevel(&cfg, &spec.data, &spec.out, &run_options(spec), log)
+            train_multilevel(&cfg, dataset(spec)?, &spec.out, &run_options(spec), log)
         }
         ModelKind::DenseGats => {
             let cfg: DenseGatsRun = resolve(spec)?;
@@ -90,8 +73,21 @@ pub fn train_run(spec: &TrainSpec, log: &mut dyn FnMut(&str)) -> Result<Outcome,
             let cfg: GarFitRun = resolve(spec)?;
             train_garfit(&cfg, spec, log)
         }
-        _ => unreachable!("refused by check_implemented"),
+        ModelKind::Hood => {
+            let cfg: HoodRun = resolve(spec)?;
+            train_hood(&cfg, spec, log)
+        }
     }
+}
+
+/// The dataset directory of `spec`, which every model but HOOD trains on.
+fn dataset(spec: &TrainSpec) -> Result<&Path, PipelineError> {
+    spec.data.as_deref().ok_or_else(|| {
+        PipelineError::Invalid(format!(
+            "--data: {} trains on a dataset (`weft data generate`); give its directory",
+            spec.model
+        ))
+    })
 }
 
 /// The loop's options of `spec`: resume, progress bar, the whole run in one session.
@@ -176,9 +172,10 @@ pub fn train_refine<M: ModelSettings + RefineConfig>(
     log: &mut dyn FnMut(&str),
 ) -> Result<Outcome, PipelineError> {
     let (inputs, influences) = (cfg.model.inputs(), cfg.model.influences());
-    let set = CharacterSet::open(&spec.data).map_err(stage(&format!(
+    let data = dataset(spec)?;
+    let set = CharacterSet::open(data).map_err(stage(&format!(
         "opening the character dataset {}",
-        spec.data.display()
+        data.display()
     )))?;
     let mut train_chars = load_split(&set, Split::Train, influences)
         .map_err(stage("loading the training characters"))?;
@@ -235,9 +232,10 @@ pub fn train_garfit(
     spec: &TrainSpec,
     log: &mut dyn FnMut(&str),
 ) -> Result<Outcome, PipelineError> {
-    let set = weft_data::Dataset::open(&spec.data).map_err(stage(&format!(
+    let data = dataset(spec)?;
+    let set = weft_data::Dataset::open(data).map_err(stage(&format!(
         "opening the fit dataset {}",
-        spec.data.display()
+        data.display()
     )))?;
     let (mut stats, mut splits) = load_fit_data(&set, &cfg.model, &[Split::Validation])
         .map_err(stage("loading the garment-body pairs"))?;
@@ -268,6 +266,53 @@ pub fn train_garfit(
         cfg.train.task.frames,
         cfg.train.task.coarse_steps(cfg.train.trainer.steps),
         cfg.train.trainer.steps,
+        spec.out.display()
+    ));
+    let model = cfg.model.init(&device)?;
+    let (_, outcome) = train(&mut task, model, &run, &run_options(spec))?;
+    Ok(outcome)
+}
+
+/// Trains HOOD of `cfg` into `spec.out` from bodies, procedural garments and motions (no
+/// dataset): builds the garment and motion pools, fits the normalisers on skinned
+/// samples (saved as `hood.json` before the first step; a resumed run keeps its own),
+/// then runs the loop with the rollout and collision curriculum.
+pub fn train_hood(
+    cfg: &HoodRun,
+    spec: &TrainSpec,
+    log: &mut dyn FnMut(&str),
+) -> Result<Outcome, PipelineError> {
+    if let Some(data) = &spec.data {
+        return Err(PipelineError::Invalid(format!(
+            "--data {}: hood trains from bodies, procedural garments and motions, not a dataset; leave --data out (motion files go in [train] motion_files)",
+            data.display()
+        )));
+    }
+    let body = weft_body::BodyModel::load_or_default(cfg.train.task.body.as_deref())
+        .map_err(|e| PipelineError::Invalid(format!("[train] body: {e}")))?;
+    let run = cfg.run_dir(&spec.out)?;
+    let stats_file = spec.out.join(weft_models::hood::STATS_FILE);
+    let stats = if spec.resume && stats_file.exists() {
+        Some(weft_models::hood::HoodStats::read(&spec.out)?)
+    } else {
+        None
+    };
+    let device = seeded(&cpu_autodiff(), cfg.train.trainer.seed);
+    let mut task = HoodTask::new(
+        &cfg.model,
+        &cfg.train.task,
+        body,
+        stats,
+        cfg.train.trainer.seed,
+        &device,
+    )?;
+    weft_train::tasks::hood::save_stats(&spec.out, task.stats())?;
+    let (garments, motions, validation) = task.describe();
+    log(&format!(
+        "training hood ({} preset, propagation radius {} edges) on {garments} garments x {motions} motions, rollouts up to {} steps; {validation} validation scenes -> {}",
+        cfg.preset,
+        cfg.model.propagation_radius()?,
+        cfg.train.task.max_rollout,
         spec.out.display()
     ));
     let model = cfg.model.init(&device)?;

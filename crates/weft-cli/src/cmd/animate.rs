@@ -2,7 +2,7 @@
 //! body shape through a motion, written as an OBJ sequence, PC2/MDD point cache, glTF
 //! binary or USD layer.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
@@ -13,10 +13,12 @@ use weft_eval::skinned::write_skinned_animation;
 use weft_garment::prepare::{fit_onto, FitOntoOptions};
 use weft_garment::FitBody;
 use weft_mesh::export::ExportFormat;
-use weft_models::load_deformer;
+use weft_models::hood::HoodPredictor;
+use weft_models::{load_deformer, Clip, Deformer, ModelKind};
 
 use super::body_args::BodyArgs;
 use super::emit;
+use super::hood_args::HoodArgs;
 use super::motion_args::MotionArgs;
 
 #[derive(Args)]
@@ -67,10 +69,14 @@ pub struct AnimateArgs {
         allow_hyphen_values = true
     )]
     made_for: Option<Vec<f64>>,
-    /// The fabric of that drape: a preset (silk, cotton, jersey, denim, leather, hood) or
-    /// a TOML file of material fields.
-    #[arg(long, default_value = "silk", requires = "made_for")]
-    material: String,
+    /// The fabric: a preset (silk, cotton, jersey, denim, leather, hood) or a TOML file
+    /// of material fields. For --made-for, the fabric of that drape (default silk); for
+    /// a HOOD run, what the garment is made of (default HOOD's material; a
+    /// comma-separated list with --material-map).
+    #[arg(long, value_name = "NAME|FILE.toml")]
+    material: Option<String>,
+    #[command(flatten)]
+    hood: HoodArgs,
     /// Print one JSON object describing what was written.
     #[arg(long)]
     json: bool,
@@ -98,7 +104,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         .with_context(|| format!("reading the garment {}", args.garment.display()))?;
     let mut garment = loaded.mesh;
     if let Some(made_for) = &args.made_for {
-        let material = super::cloth_args::material(&args.material)?;
+        let material = super::cloth_args::material(args.material.as_deref().unwrap_or("silk"))?;
         let from = FitBody::new(&body, made_for).context("--made-for")?;
         let to = FitBody::new(&body, &betas64).context("--betas")?;
         let (fitted, _) = fit_onto(&garment, &from, &to, &material, &FitOntoOptions::default())
@@ -110,11 +116,61 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             })?;
         garment.positions = fitted;
     }
-    let deformer =
-        load_deformer(&args.run).with_context(|| format!("loading run {}", args.run.display()))?;
+    let loading = || format!("loading run {}", args.run.display());
+    let (header, _) = weft_models::run::read_run_config(&args.run).with_context(loading)?;
     let started = Instant::now();
-    let mut frames = animate(deformer.as_ref(), &garment, &body, &betas, &motion)?;
+    let (deformer, mut frames, stopped): (Box<dyn Deformer + Send>, _, _) =
+        if header.model == ModelKind::Hood {
+            let mut hood = HoodPredictor::load(&args.run).with_context(loading)?;
+            args.hood
+                .configure(&mut hood, args.material.as_deref(), garment.vertex_count())?;
+            let clip = Clip {
+                betas: &betas,
+                poses: motion.poses(),
+                trans: motion.trans(),
+                fps: motion.fps(),
+            };
+            let scene = hood.scene(&garment, &body, &clip)?;
+            let rollout = hood
+                .roll_out(&[&scene])?
+                .pop()
+                .context("HOOD gave no rollout")?;
+            let frames: Vec<Vec<[f32; 3]>> = rollout
+                .frames
+                .iter()
+                .map(|f| f.iter().map(|p| p.map(|x| x as f32)).collect())
+                .collect();
+            (Box::new(hood), frames, rollout.stopped)
+        } else {
+            if let Some(flag) = args.hood.given() {
+                bail!(
+                    "{flag} applies to a hood run; {} is a {} run",
+                    args.run.display(),
+                    header.model
+                );
+            }
+            if args.material.is_some() && args.made_for.is_none() {
+                bail!(
+                    "--material needs --made-for (its drape) or a hood run; {} is a {} run",
+                    args.run.display(),
+                    header.model
+                );
+            }
+            let deformer = load_deformer(&args.run).with_context(loading)?;
+            let frames = animate(deformer.as_ref(), &garment, &body, &betas, &motion)?;
+            (deformer, frames, None)
+        };
     let seconds = started.elapsed().as_secs_f64();
+    // A diverged rollout keeps its finished frames: they are written, then reported.
+    let motion = match &stopped {
+        Some(_) => weft_motion::Motion::new(
+            motion.fps(),
+            motion.poses()[..frames.len()].to_vec(),
+            motion.trans()[..frames.len()].to_vec(),
+            motion.betas().map(<[f32]>::to_vec),
+        )?,
+        None => motion,
+    };
     // The body goes into a morph-target scene here; a skinned one poses it itself.
     let scene_body = format.holds_scene() && !args.skinned;
     let posed = if args.push_out.is_some() || scene_body {
@@ -165,6 +221,13 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             bodies.as_ref().map(|b| (body.faces(), b.as_slice())),
             &args.out,
         )?;
+    }
+    if let Some((frame, why)) = &stopped {
+        bail!(
+            "the rollout diverged at frame {frame}: {why}; the {} finished frames were written to {}",
+            frames.len(),
+            args.out.display()
+        );
     }
     if args.json {
         emit(&serde_json::to_string_pretty(&json!({

@@ -12,6 +12,7 @@ mod demo;
 mod eval;
 mod export;
 mod garment;
+mod hood_args;
 mod mesh;
 mod motion;
 mod motion_args;

@@ -81,10 +81,7 @@ impl GarFitStats {
             path: path.clone(),
             message,
         };
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| run(format!("cannot read GarFitNet's statistics: {e}")))?;
-        let stats: GarFitStats = serde_json::from_str(&text)
-            .map_err(|e| run(format!("not GarFitNet's statistics: {e}")))?;
+        let stats: GarFitStats = crate::run::read_json(&path, "GarFitNet's statistics")?;
         for n in [&stats.coarse, &stats.refine, &stats.garfit] {
             n.validate().map_err(|e| run(e.to_string()))?;
         }

@@ -29,15 +29,11 @@ pub const NORMALIZER_FILE: &str = "normalizer.json";
 
 /// Reads a run's feature normaliser (`normalizer.json`).
 pub fn read_normalizer(path: &Path) -> Result<FeatureNormalizer, ModelError> {
-    let run = |message: String| ModelError::Run {
+    let n: FeatureNormalizer = crate::run::read_json(path, "a feature normaliser")?;
+    n.validate().map_err(|e| ModelError::Run {
         path: path.to_path_buf(),
-        message,
-    };
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| run(format!("cannot read the feature normaliser: {e}")))?;
-    let n: FeatureNormalizer =
-        serde_json::from_str(&text).map_err(|e| run(format!("not a feature normaliser: {e}")))?;
-    n.validate().map_err(|e| run(e.to_string()))?;
+        message: e.to_string(),
+    })?;
     Ok(n)
 }
 

@@ -21,7 +21,7 @@ use weft_sim::{
 };
 
 use crate::error::Result;
-pub use physics::{physics_loss, FrameEnergies, PhysicsImpl};
+pub use physics::{physics_loss, FrameEnergies, PhysicsImpl, PotentialTerm};
 pub use supervised::{
     edge_loss, mean_vertex_error_mm, normal_loss, vertex_loss, GarmentTopology, Targets,
     WindowIndex,

@@ -32,7 +32,7 @@ use burn::backend::tensor::FloatTensor;
 use burn::backend::{backend_extension, Backend, Dispatch, Flex};
 use burn::tensor::{DType, Tensor, TensorData};
 use rayon::prelude::*;
-use weft_sim::Energy;
+use weft_sim::{BlockCsr, Energy, HessianKind, IncrementalPotential, SimError};
 
 use crate::error::{Result, TrainError};
 
@@ -148,6 +148,74 @@ impl FrameEnergies {
             });
         }
         Ok(())
+    }
+}
+
+/// Term `index` of a shared incremental potential, with its weight, as an energy of its
+/// own: a task builds a step's potential once (seed 004 eq. 5) and still logs each of its
+/// terms, whose sum is the potential.
+pub struct PotentialTerm {
+    potential: Arc<IncrementalPotential>,
+    index: usize,
+}
+
+impl PotentialTerm {
+    /// Every term of `potential`, in its order.
+    pub fn all(potential: IncrementalPotential) -> Vec<Arc<dyn Energy + Send + Sync>> {
+        let potential = Arc::new(potential);
+        (0..potential.terms().len())
+            .map(|index| {
+                Arc::new(PotentialTerm {
+                    potential: potential.clone(),
+                    index,
+                }) as Arc<dyn Energy + Send + Sync>
+            })
+            .collect()
+    }
+
+    fn weighted(&self) -> (f64, &dyn Energy) {
+        let t = &self.potential.terms()[self.index];
+        (t.weight, t.term.energy())
+    }
+}
+
+impl Energy for PotentialTerm {
+    fn name(&self) -> &'static str {
+        self.weighted().1.name()
+    }
+
+    fn vertex_count(&self) -> usize {
+        self.potential.vertex_count()
+    }
+
+    fn value(&self, x: &[[f64; 3]]) -> std::result::Result<f64, SimError> {
+        let (w, e) = self.weighted();
+        Ok(w * e.value(x)?)
+    }
+
+    fn add_gradient(
+        &self,
+        x: &[[f64; 3]],
+        scale: f64,
+        grad: &mut [[f64; 3]],
+    ) -> std::result::Result<f64, SimError> {
+        let (w, e) = self.weighted();
+        Ok(w * e.add_gradient(x, scale * w, grad)?)
+    }
+
+    fn add_hessian(
+        &self,
+        x: &[[f64; 3]],
+        scale: f64,
+        kind: HessianKind,
+        hess: &mut BlockCsr,
+    ) -> std::result::Result<(), SimError> {
+        let (w, e) = self.weighted();
+        e.add_hessian(x, scale * w, kind, hess)
+    }
+
+    fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
+        self.weighted().1.for_each_stencil(f)
     }
 }
 

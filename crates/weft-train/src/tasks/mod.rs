@@ -4,5 +4,6 @@
 //! metrics log are shared.
 
 pub mod garfit;
+pub mod hood;
 pub mod multilevel;
 pub mod refine;

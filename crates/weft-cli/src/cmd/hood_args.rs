@@ -1,0 +1,120 @@
+//! `weft animate`'s choices for a HOOD run, which picks them at run time: what the
+//! garment is made of (one material, or a per-vertex map over a list of them), button
+//! vertex pairs, and the frame at which they come undone.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use weft_mesh::export::npy::{read_npy, NpyData};
+use weft_models::hood::{HoodPredictor, Materials};
+
+use super::cloth_args::material;
+
+#[derive(Args)]
+pub struct HoodArgs {
+    /// HOOD: a material per garment vertex, as a .npy of one integer per vertex that
+    /// indexes the comma-separated --material list (with --material denim,silk, 0 is
+    /// denim and 1 silk).
+    #[arg(long, value_name = "MAP.npy")]
+    material_map: Option<PathBuf>,
+    /// HOOD: button pairs, a JSON file `[[a, b], ...]` of 0-based garment vertex
+    /// indices; each pair is held together by an extra graph edge.
+    #[arg(long, value_name = "PAIRS.json")]
+    buttons: Option<PathBuf>,
+    /// HOOD: the buttons come undone at this frame (their edges leave the graph).
+    #[arg(long, value_name = "FRAME", requires = "buttons")]
+    unbutton_at: Option<usize>,
+}
+
+impl HoodArgs {
+    /// The first HOOD-only flag given, to refuse it for a run of another model.
+    pub fn given(&self) -> Option<&'static str> {
+        if self.material_map.is_some() {
+            Some("--material-map")
+        } else if self.buttons.is_some() {
+            Some("--buttons")
+        } else {
+            None
+        }
+    }
+
+    /// Sets `hood`'s materials (from `--material`, default HOOD's own) and buttons for a
+    /// garment of `vertices` vertices.
+    pub fn configure(
+        &self,
+        hood: &mut HoodPredictor,
+        materials: Option<&str>,
+        vertices: usize,
+    ) -> Result<()> {
+        let list: Vec<_> = match materials {
+            Some(spec) => spec.split(',').map(material).collect::<Result<_>>()?,
+            None => vec![weft_sim::Material::hood()],
+        };
+        hood.materials = match &self.material_map {
+            None if list.len() > 1 => bail!(
+                "--material {}: a list of materials needs --material-map to say which vertex is which",
+                materials.unwrap_or_default()
+            ),
+            None => Materials::Uniform(list[0]),
+            Some(path) => Materials::PerVertex(
+                material_map(path, vertices, list.len())?
+                    .into_iter()
+                    .map(|k| list[k])
+                    .collect(),
+            ),
+        };
+        if let Some(path) = &self.buttons {
+            hood.buttons = buttons(path)?;
+        }
+        hood.options.unbutton_at = self.unbutton_at;
+        Ok(())
+    }
+}
+
+/// The per-vertex material indices in `path`: `vertices` integers below `materials`.
+fn material_map(path: &std::path::Path, vertices: usize, materials: usize) -> Result<Vec<usize>> {
+    let array = read_npy(path).with_context(|| format!("--material-map {}", path.display()))?;
+    let values: Vec<i64> = match array.data {
+        NpyData::I32(v) => v.into_iter().map(i64::from).collect(),
+        NpyData::I64(v) => v,
+        NpyData::U32(v) => v.into_iter().map(i64::from).collect(),
+        NpyData::U8(v) => v.into_iter().map(i64::from).collect(),
+        other => bail!(
+            "--material-map {}: elements of type {}; expected integers (indices into --material)",
+            path.display(),
+            other.descr()
+        ),
+    };
+    if values.len() != vertices {
+        bail!(
+            "--material-map {}: {} entries; expected one per garment vertex ({vertices})",
+            path.display(),
+            values.len()
+        );
+    }
+    values
+        .iter()
+        .enumerate()
+        .map(|(i, &k)| {
+            usize::try_from(k).ok().filter(|&k| k < materials).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--material-map {}: entry {i} is {k}; expected an index below the {materials} --material given",
+                    path.display()
+                )
+            })
+        })
+        .collect()
+}
+
+/// Button pairs from a JSON file `[[a, b], ...]`.
+fn buttons(path: &std::path::Path) -> Result<Vec<[u32; 2]>> {
+    let text = weft_mesh::io::read_input_to_string(path)
+        .with_context(|| format!("--buttons {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| {
+        format!(
+            "--buttons {}: expected a JSON list of vertex pairs like [[12, 340], [15, 352]]",
+            path.display()
+        )
+    })
+}

@@ -1,0 +1,238 @@
+//! HOOD's settings (`[model]` of a run): widths, the levels of the garment hierarchy,
+//! the multi-level message-passing schedule, and the body-edge radius.
+//!
+//! The schedule is data: `"0,1 x3 | 1,2 x3 | 2 x3 | 1,2 x3 | 0,1 x3"` lists, step by
+//! step, the mesh levels whose edges a message-passing step reads (0 is the garment
+//! mesh, 1 and 2 the coarser levels of weft-hierarchy's nested pooling); `x3` repeats a
+//! step. Body edges are read by every step. Fine15 and Fine48 of seed 004 Table 1 are
+//! `"0 x15"` and `"0 x48"` with the same network.
+
+use burn::config::Config;
+use burn::tensor::Device;
+use weft_nn::{MlpConfig, ProcessorConfig};
+
+use super::model::Hood;
+use crate::error::ModelError;
+
+/// The network's input widths (seed 004 §3, hood-reference §1.2; fixed by the features).
+pub mod widths {
+    /// Material inputs (bending, μ, λ in [0, 1]), read raw by nodes and edges.
+    pub const MATERIAL: usize = 3;
+    /// Node types: free garment vertex, pinned garment vertex, body vertex.
+    pub const NODE_TYPES: usize = 3;
+    /// Normalised node features besides the level one-hot: velocity (3), normal (3),
+    /// node type (3), time step (1), log mass (1).
+    pub const NODE_BASE: usize = 3 + 3 + NODE_TYPES + 1 + 1;
+    /// Normalised mesh-edge features: current relative position and its length, rest
+    /// relative position and its length, time step.
+    pub const MESH_EDGE: usize = 3 + 1 + 3 + 1 + 1;
+    /// Body-edge features: garment minus body at t and its length, garment at t minus
+    /// body at t + 1 and its length, time step.
+    pub const BODY_EDGE: usize = 3 + 1 + 3 + 1 + 1;
+}
+
+/// Configuration of [`Hood`].
+#[derive(Config, Debug, PartialEq)]
+pub struct HoodConfig {
+    /// Latent width of every node and edge (seed 004: 128).
+    #[config(default = 128)]
+    pub latent: usize,
+    /// Hidden layers of every MLP (seed 004: 2).
+    #[config(default = 2)]
+    pub hidden_layers: usize,
+    /// Levels of the garment hierarchy, the mesh included (seed 004: the mesh and three
+    /// coarser levels, of which the schedule reads two).
+    #[config(default = 3)]
+    pub levels: usize,
+    /// The message-passing schedule (module documentation).
+    #[config(default = "String::from(\"0,1 x3 | 1,2 x3 | 2 x3 | 1,2 x3 | 0,1 x3\")")]
+    pub schedule: String,
+    /// A garment vertex is joined to its nearest body vertex when that is closer than
+    /// this (m). HOOD's code: 3 cm.
+    #[config(default = 0.03)]
+    pub body_radius: f64,
+    /// Body vertices whose skinning weight on the hands and wrists exceeds 0.5 take no
+    /// body edges (HOOD omits the hands "to avoid body self-penetrations").
+    #[config(default = true)]
+    pub omit_hands: bool,
+}
+
+/// A parsed schedule: for each message-passing step, the mesh levels it reads.
+pub type Schedule = Vec<Vec<usize>>;
+
+impl HoodConfig {
+    /// The preset `name`: `paper` (seed 004: latent 128, two hidden layers, 15 steps over
+    /// the mesh and two coarse levels) or `cpu` (latent 32, one hidden layer, seven steps
+    /// over the same levels: a propagation radius of 24 mesh edges instead of 48, so a
+    /// usable model trains on two cores in half an hour).
+    pub fn preset(name: &str) -> Result<Self, ModelError> {
+        match name {
+            "paper" => Ok(Self::new()),
+            "cpu" => Ok(Self::new()
+                .with_latent(32)
+                .with_hidden_layers(1)
+                .with_schedule("0,1 | 1,2 x2 | 2 | 1,2 x2 | 0,1".into())),
+            other => Err(ModelError::Config(format!(
+                "unknown preset `{other}`; expected cpu or paper"
+            ))),
+        }
+    }
+
+    /// The schedule as level lists; errors name the step.
+    pub fn parse_schedule(&self) -> Result<Schedule, ModelError> {
+        parse_schedule(&self.schedule, self.levels)
+    }
+
+    /// How far information travels in one forward pass, in mesh edges: a step that
+    /// reads level `l` moves it `2^l` edges (each level's edges span twice the last's).
+    pub fn propagation_radius(&self) -> Result<usize, ModelError> {
+        Ok(self
+            .parse_schedule()?
+            .iter()
+            .map(|levels| 1usize << levels.iter().copied().max().unwrap_or(0))
+            .sum())
+    }
+
+    /// Checks the values; errors name the field.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        ModelError::check_positive(&[
+            ("latent", self.latent),
+            ("hidden_layers", self.hidden_layers),
+            ("levels", self.levels),
+        ])?;
+        if !(self.body_radius.is_finite() && self.body_radius > 0.0) {
+            return Err(ModelError::Config(format!(
+                "body_radius = {}: expected a positive number of metres",
+                self.body_radius
+            )));
+        }
+        self.parse_schedule().map(|_| ())
+    }
+
+    /// An MLP of this config: hidden layers of the latent width, LayerNorm on the output
+    /// unless it is the decoder.
+    fn mlp(&self, input: usize, output: usize, layer_norm: bool) -> MlpConfig {
+        let mut widths = vec![self.latent; self.hidden_layers];
+        widths.push(output);
+        MlpConfig::new(input, widths)
+            .with_output_activation(weft_nn::Activation::None)
+            .with_layer_norm(layer_norm)
+    }
+
+    /// Builds the network; errors name the field.
+    pub fn init(&self, device: &Device) -> Result<Hood, ModelError> {
+        self.validate()?;
+        let schedule = self.parse_schedule()?;
+        let body_set = self.levels;
+        // Edge sets: one per mesh level, then the body edges (read by every step).
+        let steps: Vec<Vec<usize>> = schedule
+            .into_iter()
+            .map(|mut levels| {
+                levels.push(body_set);
+                levels
+            })
+            .collect();
+        let node_width = widths::NODE_BASE + self.levels + widths::MATERIAL;
+        let mesh_width = widths::MESH_EDGE + widths::MATERIAL;
+        Ok(Hood {
+            node_encoder: self.mlp(node_width, self.latent, true).init(device)?,
+            mesh_encoders: (0..self.levels)
+                .map(|_| self.mlp(mesh_width, self.latent, true).init(device))
+                .collect::<Result<_, _>>()?,
+            body_encoder: self
+                .mlp(widths::BODY_EDGE, self.latent, true)
+                .init(device)?,
+            processor: ProcessorConfig::new(self.latent, self.levels + 1, steps)
+                .with_hidden_layers(self.hidden_layers)
+                .init(device)?,
+            decoder: self.mlp(self.latent, 3, false).init(device)?,
+            levels: self.levels,
+        })
+    }
+}
+
+/// Parses `text` (module documentation) for a hierarchy of `levels` levels.
+pub fn parse_schedule(text: &str, levels: usize) -> Result<Schedule, ModelError> {
+    let bad = |step: &str, why: String| {
+        ModelError::Config(format!("schedule step `{}`: {why}", step.trim()))
+    };
+    let mut out = Vec::new();
+    for step in text.split('|') {
+        let mut parts = step.split_whitespace();
+        let Some(list) = parts.next() else {
+            return Err(bad(step, "empty; expected levels like `0,1`".into()));
+        };
+        let repeat = match parts.next() {
+            None => 1,
+            Some(r) => r
+                .strip_prefix('x')
+                .and_then(|n| n.parse::<usize>().ok())
+                .filter(|&n| n > 0)
+                .ok_or_else(|| bad(step, format!("`{r}` is not a repeat like `x3`")))?,
+        };
+        if let Some(extra) = parts.next() {
+            return Err(bad(step, format!("unexpected `{extra}`")));
+        }
+        let mut set = Vec::new();
+        for l in list.split(',') {
+            let l: usize = l
+                .parse()
+                .map_err(|_| bad(step, format!("`{l}` is not a level number")))?;
+            if l >= levels {
+                return Err(bad(
+                    step,
+                    format!("level {l}, but the hierarchy has levels 0..{levels} (`levels`)"),
+                ));
+            }
+            if set.contains(&l) {
+                return Err(bad(step, format!("level {l} twice")));
+            }
+            set.push(l);
+        }
+        out.extend(std::iter::repeat_n(set, repeat));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn schedules_parse_and_give_the_papers_radius() {
+        let paper = HoodConfig::preset("paper").unwrap();
+        let s = paper.parse_schedule().unwrap();
+        assert_eq!(s.len(), 15);
+        assert_eq!(s[0], vec![0, 1]);
+        assert_eq!(s[6], vec![2]);
+        // Seed 004 Table 1: the hierarchical model's radius is 48 mesh edges.
+        assert_eq!(paper.propagation_radius().unwrap(), 48);
+        let fine15 = paper.clone().with_schedule("0 x15".into());
+        assert_eq!(fine15.propagation_radius().unwrap(), 15);
+        assert_eq!(
+            HoodConfig::preset("cpu")
+                .unwrap()
+                .propagation_radius()
+                .unwrap(),
+            24
+        );
+        for (text, needle) in [
+            ("0,3", "level 3"),
+            ("0,0", "twice"),
+            ("0 x0", "repeat"),
+            ("a", "not a level"),
+            ("0 | ", "empty"),
+            ("0 x2 y", "unexpected"),
+        ] {
+            let e = parse_schedule(text, 3).unwrap_err().to_string();
+            assert!(e.contains(needle), "{text}: {e}");
+        }
+        assert!(HoodConfig::preset("huge").is_err());
+        let e = paper
+            .with_body_radius(0.0)
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("body_radius"), "{e}");
+    }
+}

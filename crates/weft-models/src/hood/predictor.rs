@@ -1,0 +1,172 @@
+//! A trained HOOD run opened for rollouts: its network at the latest checkpoint, its
+//! `[model]`, its normalisers, and the run-time choices HOOD adds (materials, buttons,
+//! when to unbutton, which vertices are pinned).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use burn::tensor::Device;
+use weft_body::BodyModel;
+use weft_mesh::TriMesh;
+use weft_sim::{Attachment, Material};
+
+use super::config::HoodConfig;
+use super::model::Hood;
+use super::rollout::{roll_out, Rollout, RolloutOptions};
+use super::scene::{Materials, Scene};
+use super::stats::{HoodStats, STATS_FILE};
+use crate::deformer::{Clip, Deformer, Frames};
+use crate::error::ModelError;
+use crate::kind::ModelKind;
+use crate::refine::predictor::load_record;
+use crate::run::{latest_checkpoint, read_run_config, RunLayout};
+
+/// A trained HOOD run ready to roll out on the CPU.
+pub struct HoodPredictor {
+    /// The network at the run's latest checkpoint.
+    pub model: Hood,
+    /// The run's `[model]`.
+    pub config: HoodConfig,
+    /// The run's normalisers.
+    pub stats: HoodStats,
+    /// What garments are made of (default: HOOD's material).
+    pub materials: Materials,
+    /// Button vertex pairs of the garment (none by default).
+    pub buttons: Vec<[u32; 2]>,
+    /// Which garment vertices follow the body (default: the top opening, as `weft
+    /// simulate` attaches them).
+    pub attachment: Attachment,
+    /// Settling, unbuttoning and the divergence guard.
+    pub options: RolloutOptions,
+    device: Device,
+    checkpoint: PathBuf,
+}
+
+impl HoodPredictor {
+    /// Loads the run in `dir`. Errors name the file: a run of another kind, a `[model]`
+    /// that does not validate, a checkpoint that does not fit, missing normalisers.
+    pub fn load(dir: &Path) -> Result<Self, ModelError> {
+        let (header, mut table) = read_run_config(dir)?;
+        let path = RunLayout::new(dir).config();
+        let run_err = |message: String| ModelError::Run {
+            path: path.clone(),
+            message,
+        };
+        if header.model != ModelKind::Hood {
+            return Err(run_err(format!("a {} run, not a hood run", header.model)));
+        }
+        let model = match table.remove("model") {
+            Some(toml::Value::Table(t)) => t,
+            _ => return Err(run_err("no [model] table".into())),
+        };
+        let config: HoodConfig = weft_config::overlay(
+            &HoodConfig::new(),
+            &model,
+            &path.display().to_string(),
+            "model",
+        )?;
+        config
+            .validate()
+            .map_err(|e| run_err(format!("[model]: {e}")))?;
+        let device = weft_nn::backend::cpu();
+        let checkpoint = latest_checkpoint(dir)?;
+        let model = load_record(config.init(&device)?, &checkpoint)?;
+        let stats = HoodStats::read(dir)?;
+        if stats.levels() != config.levels {
+            return Err(run_err(format!(
+                "{STATS_FILE} was fitted for {} hierarchy levels, [model] levels = {}",
+                stats.levels(),
+                config.levels
+            )));
+        }
+        Ok(HoodPredictor {
+            model,
+            config,
+            stats,
+            materials: Materials::Uniform(Material::hood()),
+            buttons: Vec::new(),
+            attachment: Attachment::TopOpening,
+            options: RolloutOptions::default(),
+            device,
+            checkpoint,
+        })
+    }
+
+    /// The scene of `garment` on `body` moving through `clip`, with this predictor's
+    /// materials, buttons and attachment.
+    pub fn scene(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+    ) -> Result<Scene, ModelError> {
+        let mut scene = Scene::new(
+            garment,
+            body,
+            clip,
+            &self.materials,
+            self.attachment,
+            &self.config,
+        )?;
+        if !self.buttons.is_empty() {
+            scene.garment = scene.garment.with_buttons(&self.buttons)?;
+        }
+        Ok(scene)
+    }
+
+    /// Rolls out several scenes together (one forward pass per frame for all of them).
+    pub fn roll_out(&self, scenes: &[&Scene]) -> Result<Vec<Rollout>, ModelError> {
+        roll_out(
+            &self.model,
+            &self.stats,
+            &self.config,
+            scenes,
+            &self.options,
+            &self.device,
+        )
+    }
+}
+
+impl Deformer for HoodPredictor {
+    fn name(&self) -> String {
+        "HOOD".into()
+    }
+
+    fn kind(&self) -> Option<ModelKind> {
+        Some(ModelKind::Hood)
+    }
+
+    fn variant(&self) -> BTreeMap<String, String> {
+        BTreeMap::from([
+            ("checkpoint".into(), self.checkpoint.display().to_string()),
+            ("schedule".into(), self.config.schedule.clone()),
+            ("latent".into(), self.config.latent.to_string()),
+        ])
+    }
+
+    /// The rollout's frames; a rollout that diverges is an error naming the frame (the
+    /// CLI's `weft animate` keeps the finished frames through [`HoodPredictor::roll_out`]).
+    fn animate(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+    ) -> Result<Frames, ModelError> {
+        let scene = self.scene(garment, body, clip)?;
+        let rollout = self
+            .roll_out(&[&scene])?
+            .pop()
+            .ok_or_else(|| ModelError::Config("HOOD returned no rollout".into()))?;
+        if let Some((frame, why)) = rollout.stopped {
+            return Err(ModelError::Diverged {
+                frame,
+                message: why,
+            });
+        }
+        Ok(rollout
+            .frames
+            .into_iter()
+            .map(|f| f.into_iter().map(|p| p.map(|x| x as f32)).collect())
+            .collect())
+    }
+}

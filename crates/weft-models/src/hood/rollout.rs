@@ -1,0 +1,283 @@
+//! From the network's output to the garment at t + 1 (seed 004 §3.3; hood-reference
+//! §1.6): the decoder's acceleration `a` (scaled back by the output normaliser, metres
+//! per frame²) gives `x_{t+1} = x_t + (x_t − x_{t−1}) + a` for free vertices; pinned
+//! vertices go to their targets. The same tensor expression serves training (the loss
+//! differentiates through it) and inference, so they cannot drift apart.
+
+use burn::tensor::{Device, Tensor, TensorData};
+
+use super::config::HoodConfig;
+use super::features::GarmentStep;
+use super::garment::HoodGarment;
+use super::model::{Hood, HoodInput};
+use super::scene::{Scene, StateRef, StepAt};
+use super::stats::HoodStats;
+use crate::error::ModelError;
+
+/// What a step adds the acceleration to: `x_t + v_t` (free) or the target (pinned), and
+/// which vertices take the acceleration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Advance {
+    /// `x_t + (x_t − x_{t−1})` for free vertices, the target for pinned ones, flattened.
+    pub base: Vec<f32>,
+    /// 1 for free vertices, 0 for pinned ones.
+    pub free: Vec<f32>,
+}
+
+impl Advance {
+    /// The advance of `garment` from `state`.
+    pub fn new(garment: &HoodGarment, state: &GarmentStep) -> Self {
+        let n = garment.vertex_count();
+        let mut base = Vec::with_capacity(3 * n);
+        let mut free = Vec::with_capacity(n);
+        for i in 0..n {
+            if garment.pinned[i] {
+                base.extend(state.pin_targets[i].map(|x| x as f32));
+                free.push(0.0);
+            } else {
+                let (c, p) = (state.cur[i], state.prev[i]);
+                base.extend((0..3).map(|k| (2.0 * c[k] - p[k]) as f32));
+                free.push(1.0);
+            }
+        }
+        Advance { base, free }
+    }
+
+    /// The inertial target `x̂ = x_t + v_t` of the incremental potential (the base, with
+    /// pinned vertices at their targets), in f64.
+    pub fn inertial_target(&self) -> Vec<[f64; 3]> {
+        self.base
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]].map(f64::from))
+            .collect()
+    }
+}
+
+/// `x_{t+1}` of every garment of a batch, `[Σ N, 3]`, from the network's normalised
+/// output `out` (rows in the same order as `advances`).
+pub fn next_positions(
+    out: Tensor<2>,
+    advances: &[&Advance],
+    stats: &HoodStats,
+    device: &Device,
+) -> Result<Tensor<2>, ModelError> {
+    let rows: usize = advances.iter().map(|a| a.free.len()).sum();
+    if out.dims() != [rows, 3] {
+        return Err(ModelError::mismatch(
+            "HOOD output",
+            format!("[{rows}, 3]"),
+            format!("{:?}", out.dims()),
+        ));
+    }
+    let base: Vec<f32> = advances
+        .iter()
+        .flat_map(|a| a.base.iter().copied())
+        .collect();
+    let free: Vec<f32> = advances
+        .iter()
+        .flat_map(|a| a.free.iter().copied())
+        .collect();
+    let base = Tensor::<2>::from_data(TensorData::new(base, [rows, 3]), device);
+    let free = Tensor::<2>::from_data(TensorData::new(free, [rows, 1]), device);
+    let std = Tensor::<2>::from_data(TensorData::new(stats.output.std.clone(), [1, 3]), device);
+    let mean = Tensor::<2>::from_data(TensorData::new(stats.output.mean.clone(), [1, 3]), device);
+    let a = out * std + mean;
+    Ok(base + a * free)
+}
+
+/// How a rollout runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RolloutOptions {
+    /// The first step holds the body at frame 0 and lasts this long (s), so the skinned
+    /// garment drapes before the motion starts (HOOD: 1/3 s).
+    pub settle_dt: f64,
+    /// Button edges are removed from this frame on (`None`: kept throughout).
+    pub unbutton_at: Option<usize>,
+    /// A step that moves a vertex faster than this (m/s), or to a non-finite position,
+    /// stops that rollout: the finished frames are kept.
+    pub max_speed: f64,
+}
+
+impl Default for RolloutOptions {
+    fn default() -> Self {
+        RolloutOptions {
+            settle_dt: 1.0 / 3.0,
+            unbutton_at: None,
+            max_speed: 50.0,
+        }
+    }
+}
+
+/// One scene's rollout: the garment at every frame it reached, and why it stopped early
+/// if it did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rollout {
+    /// Garment positions per frame (frame 0: the settled garment).
+    pub frames: Vec<Vec<[f64; 3]>>,
+    /// The frame at which the rollout diverged, with what happened.
+    pub stopped: Option<(usize, String)>,
+}
+
+/// One HOOD step of several states at once (one disjoint graph): `x_{t+1}` of each.
+pub fn step_batch(
+    model: &Hood,
+    stats: &HoodStats,
+    steps: &[(&super::features::StepGraph, &Advance)],
+    device: &Device,
+) -> Result<Vec<Vec<[f64; 3]>>, ModelError> {
+    let graphs: Vec<_> = steps.iter().map(|s| s.0).collect();
+    let advances: Vec<_> = steps.iter().map(|s| s.1).collect();
+    let out = model.forward(HoodInput::new(&graphs, stats, device)?)?;
+    let x = next_positions(out, &advances, stats, device)?;
+    let flat: Vec<f32> = x
+        .into_data()
+        .convert::<f32>()
+        .try_into_vec::<f32>()
+        .map_err(|e| ModelError::Config(format!("HOOD output: {e:?}")))?;
+    let mut rows = flat
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]].map(f64::from));
+    Ok(advances
+        .iter()
+        .map(|a| rows.by_ref().take(a.free.len()).collect())
+        .collect())
+}
+
+/// Why `next` is not an acceptable step from `cur` over `dt` seconds, if it is not.
+fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Option<String> {
+    let mut fastest = (0.0f64, 0usize);
+    for (i, (a, b)) in cur.iter().zip(next).enumerate() {
+        if !b.iter().all(|x| x.is_finite()) {
+            return Some(format!("vertex {i} has a non-finite position"));
+        }
+        let d = weft_mesh::vec3::dist(*a, *b) / dt;
+        if d > fastest.0 {
+            fastest = (d, i);
+        }
+    }
+    (fastest.0 > max_speed).then(|| {
+        format!(
+            "vertex {} moved at {:.1} m/s (limit {max_speed} m/s)",
+            fastest.1, fastest.0
+        )
+    })
+}
+
+/// HOOD rolled out over every frame of each scene, the scenes advanced together (one
+/// forward pass per frame for the whole batch).
+///
+/// Frame 0 is the skinned, pushed-out garment after the settling step; frame `t + 1`
+/// comes from frames `t − 1` and `t` and the body at `t − 1`, `t`, `t + 1`. After the
+/// settling step the garment starts at rest (zero velocity): HOOD's code feeds the
+/// settling displacement, taken over 1/3 s, in as the next step's per-frame velocity,
+/// ten times too fast for a 1/30 s step.
+pub fn roll_out(
+    model: &Hood,
+    stats: &HoodStats,
+    config: &HoodConfig,
+    scenes: &[&Scene],
+    options: &RolloutOptions,
+    device: &Device,
+) -> Result<Vec<Rollout>, ModelError> {
+    let buttoned = |t: usize| options.unbutton_at.is_none_or(|f| t < f);
+    let mut states = Vec::with_capacity(scenes.len());
+    for s in scenes {
+        let start = s.start(0, true)?;
+        let at = StepAt {
+            t: 0,
+            settle: true,
+            dt: options.settle_dt,
+            buttoned: buttoned(0),
+        };
+        states.push(s.step(start.as_ref(), at, config)?);
+    }
+    let pairs: Vec<_> = states.iter().map(|(g, a)| (g, a)).collect();
+    let settled = step_batch(model, stats, &pairs, device)?;
+    let mut out: Vec<Rollout> = settled
+        .into_iter()
+        .map(|x| Rollout {
+            frames: vec![x],
+            stopped: None,
+        })
+        .collect();
+    let longest = scenes.iter().map(|s| s.frames()).max().unwrap_or(0);
+    for t in 0..longest.saturating_sub(1) {
+        let active: Vec<usize> = (0..scenes.len())
+            .filter(|&k| out[k].stopped.is_none() && t + 1 < scenes[k].frames())
+            .collect();
+        if active.is_empty() {
+            break;
+        }
+        let mut steps = Vec::with_capacity(active.len());
+        for &k in &active {
+            let frames = &out[k].frames;
+            let cur = &frames[t];
+            let prev = if t == 0 { cur } else { &frames[t - 1] };
+            let at = StepAt {
+                t,
+                settle: false,
+                dt: scenes[k].dt,
+                buttoned: buttoned(t + 1),
+            };
+            steps.push(scenes[k].step(StateRef { prev, cur }, at, config)?);
+        }
+        let pairs: Vec<_> = steps.iter().map(|(g, a)| (g, a)).collect();
+        let next = step_batch(model, stats, &pairs, device)?;
+        for (&k, x) in active.iter().zip(next) {
+            match diverged(&out[k].frames[t], &x, scenes[k].dt, options.max_speed) {
+                Some(why) => out[k].stopped = Some((t + 1, why)),
+                None => out[k].frames.push(x),
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use weft_mesh::primitives::grid;
+    use weft_nn::backend::cpu;
+    use weft_nn::FeatureNormalizer;
+
+    #[test]
+    fn free_vertices_take_the_acceleration_and_pins_their_target() {
+        let g = grid(2, 2, 1.0);
+        let garment = HoodGarment::new(&g, 1, &[3], vec![1.0; 4], vec![[0.5; 3]; 4]).unwrap();
+        let cur = g.positions.clone();
+        let prev: Vec<[f64; 3]> = cur.iter().map(|p| [p[0] - 0.1, p[1], p[2]]).collect();
+        let targets = vec![[7.0, 8.0, 9.0]; 4];
+        let adv = Advance::new(
+            &garment,
+            &GarmentStep {
+                prev: &prev,
+                cur: &cur,
+                pin_targets: &targets,
+                buttoned: false,
+            },
+        );
+        let norm = FeatureNormalizer {
+            mean: vec![0.0, -1.0, 0.0],
+            std: vec![2.0, 1.0, 1.0],
+        };
+        let stats = HoodStats {
+            node: norm.clone(),
+            mesh: norm.clone(),
+            body: norm.clone(),
+            output: norm,
+        };
+        let device = cpu();
+        let out = Tensor::<2>::ones([4, 3], &device);
+        let x = next_positions(out, &[&adv], &stats, &device).unwrap();
+        let x: Vec<f32> = x.into_data().convert::<f32>().try_into_vec().unwrap();
+        // Vertex 0: x_t + v_t = (0.1, 0, 0); a = (2, 0, 1).
+        let expect0 = [cur[0][0] + 0.1 + 2.0, cur[0][1], cur[0][2] + 1.0];
+        for k in 0..3 {
+            assert!((f64::from(x[k]) - expect0[k]).abs() < 1e-5, "{x:?}");
+        }
+        assert_eq!(&x[9..12], &[7.0, 8.0, 9.0]);
+        assert_eq!(adv.inertial_target()[3], [7.0, 8.0, 9.0]);
+        let bad = next_positions(Tensor::<2>::ones([3, 3], &device), &[&adv], &stats, &device);
+        assert!(bad.is_err());
+    }
+}

@@ -1,0 +1,287 @@
+//! A garment on a moving body, ready for HOOD to roll out or to train on: the garment's
+//! graph and physics, the posed body at every frame, the garment skinned to the body
+//! (where every rollout starts), and the pinned vertices' targets.
+//!
+//! The garment comes in the rest pose of the body at the clip's shape, as every
+//! [`crate::Deformer`] takes it. Its rest shape is that mesh. The start state is the
+//! garment skinned to the frame (weights transferred from the body and diffused over
+//! the garment, as HOOD's loose garments are; LBS) and pushed
+//! 2 mm out of the body (HOOD's push-out). Pinned vertices — the waistband or neckline,
+//! as `weft simulate` attaches them — follow the body's skin triangles (weft-sim's
+//! [`SkinAnchors`]), so HOOD and the simulator hold the same vertices the same way.
+
+use weft_body::joints::smpl_joint_index;
+use weft_body::BodyModel;
+use weft_garment::onbody::push_out;
+use weft_mesh::TriMesh;
+use weft_sim::{Attachment, ClothModel, Material, SimOptions, SkinAnchors};
+
+use super::config::HoodConfig;
+use super::features::{BodyStep, GarmentStep, StepGraph};
+use super::garment::HoodGarment;
+use super::rollout::Advance;
+use crate::baseline::SkinnedGarment;
+use crate::deformer::Clip;
+use crate::error::{body_err, ModelError};
+
+/// HOOD's push-out distance before a rollout starts (m).
+pub const PUSH_OUT: f64 = 0.002;
+
+/// Joints whose vertices take no body edges when [`HoodConfig::omit_hands`] is set.
+const HAND_JOINTS: [&str; 4] = ["left_wrist", "right_wrist", "left_hand", "right_hand"];
+
+/// What a garment is made of: one material, or one per vertex (a material map).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Materials {
+    /// The same material everywhere.
+    Uniform(Material),
+    /// A material per garment vertex.
+    PerVertex(Vec<Material>),
+}
+
+impl Materials {
+    /// The cloth physics of `rest` made of these materials; errors name the count.
+    pub fn cloth(&self, rest: &TriMesh) -> Result<ClothModel, ModelError> {
+        let sim = |e: weft_sim::SimError| ModelError::Garment(format!("garment physics: {e}"));
+        match self {
+            Materials::Uniform(m) => ClothModel::uniform(rest, m, SimOptions::default()),
+            Materials::PerVertex(m) => {
+                if m.len() != rest.vertex_count() {
+                    return Err(ModelError::mismatch(
+                        "material map",
+                        format!("one material per garment vertex ({})", rest.vertex_count()),
+                        m.len(),
+                    ));
+                }
+                ClothModel::from_vertex_materials(rest, m, SimOptions::default())
+            }
+        }
+        .map_err(sim)
+    }
+
+    /// The network's material inputs of every vertex of a garment of `n` vertices.
+    pub fn inputs(&self, n: usize) -> Vec<[f32; 3]> {
+        let one = |m: &Material| weft_sim::hood_inputs(m).map(|x| x as f32);
+        match self {
+            Materials::Uniform(m) => vec![one(m); n],
+            Materials::PerVertex(m) => m.iter().map(one).collect(),
+        }
+    }
+}
+
+/// The garment at the start of a step: its positions at t − 1 and t.
+#[derive(Clone, Debug, PartialEq)]
+pub struct State {
+    /// Positions at t − 1.
+    pub prev: Vec<[f64; 3]>,
+    /// Positions at t.
+    pub cur: Vec<[f64; 3]>,
+}
+
+impl State {
+    /// The state borrowed.
+    pub fn as_ref(&self) -> StateRef<'_> {
+        StateRef {
+            prev: &self.prev,
+            cur: &self.cur,
+        }
+    }
+}
+
+/// A borrowed [`State`] (a rollout's two last frames).
+#[derive(Clone, Copy, Debug)]
+pub struct StateRef<'a> {
+    /// Positions at t − 1.
+    pub prev: &'a [[f64; 3]],
+    /// Positions at t.
+    pub cur: &'a [[f64; 3]],
+}
+
+/// Which step of a scene: from frame `t` to `t + 1`, or the settling step at `t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepAt {
+    /// The frame the step starts from.
+    pub t: usize,
+    /// The body held at `t` (HOOD's first step, with a long time step so the garment
+    /// drapes).
+    pub settle: bool,
+    /// The step's length (s).
+    pub dt: f64,
+    /// Whether the button edges are in the graph.
+    pub buttoned: bool,
+}
+
+/// A garment on a moving body; see the module documentation.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The garment's graph.
+    pub garment: HoodGarment,
+    /// The garment's physics (the loss; diagnostics).
+    pub cloth: ClothModel,
+    /// The body's triangles.
+    pub faces: Vec<[u32; 3]>,
+    /// The posed body at every frame.
+    pub body: Vec<Vec<[f64; 3]>>,
+    /// Body vertices that take no body edges.
+    pub omit: Vec<bool>,
+    /// The garment skinned to every frame.
+    pub skinned: Vec<Vec<[f64; 3]>>,
+    anchors: SkinAnchors,
+    /// Seconds per frame.
+    pub dt: f64,
+}
+
+fn f64s(frame: &[[f32; 3]]) -> Vec<[f64; 3]> {
+    frame.iter().map(|p| p.map(f64::from)).collect()
+}
+
+impl Scene {
+    /// `garment` (rest pose of `body` at `clip.betas`) made of `materials`, on `body`
+    /// moving through `clip`, its `attachment` pinned.
+    pub fn new(
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+        materials: &Materials,
+        attachment: Attachment,
+        config: &HoodConfig,
+    ) -> Result<Self, ModelError> {
+        clip.check()?;
+        if clip.len() < 2 {
+            return Err(ModelError::mismatch(
+                "motion frames",
+                "at least 2 for a rollout",
+                clip.len(),
+            ));
+        }
+        let cloth = materials.cloth(garment)?;
+        let pinned = attachment.vertices(garment);
+        let n = garment.vertex_count();
+        let hood = HoodGarment::new(
+            garment,
+            config.levels,
+            &pinned,
+            cloth.masses().to_vec(),
+            materials.inputs(n),
+        )?;
+        let posed = weft_body::PosedSequence::new(body, clip.betas, clip.poses, clip.trans)
+            .map_err(body_err("posing the body"))?;
+        let frames: Vec<Vec<[f64; 3]>> = (0..posed.len())
+            .map(|t| f64s(posed.frame(t).unwrap_or(&[])))
+            .collect();
+        let skinned: Vec<Vec<[f64; 3]>> = SkinnedGarment::diffused(garment, body, clip.betas)?
+            .animate(body, clip, weft_body::Skinning::Lbs)?
+            .iter()
+            .map(|f| f64s(f))
+            .collect();
+        let betas: Vec<f64> = clip.betas.iter().map(|&b| f64::from(b)).collect();
+        let rest_body = body.shape(&betas).map_err(body_err("shaping the body"))?;
+        let rest_surface = body
+            .body_surface(&rest_body.positions)
+            .map_err(|e| body_err("the body surface")(e.into()))?;
+        let anchors = SkinAnchors::new(&rest_surface, &garment.positions, &pinned)
+            .map_err(|e| ModelError::Garment(format!("pinning the garment: {e}")))?;
+        Ok(Scene {
+            garment: hood,
+            cloth,
+            faces: body.faces().to_vec(),
+            body: frames,
+            omit: if config.omit_hands {
+                hand_vertices(body)
+            } else {
+                Vec::new()
+            },
+            skinned,
+            anchors,
+            dt: 1.0 / clip.fps,
+        })
+    }
+
+    /// Frames of the clip.
+    pub fn frames(&self) -> usize {
+        self.body.len()
+    }
+
+    /// The skinned garment at frame `t` with its pinned vertices at their anchors: the
+    /// pin targets of a step ending at `t`.
+    pub fn pin_targets(&self, t: usize) -> Vec<[f64; 3]> {
+        let mut x = self.skinned[t].clone();
+        let targets = self.anchors.targets(&self.body[t], &self.faces);
+        for (&v, p) in self.anchors.vertices().iter().zip(targets) {
+            x[v as usize] = p;
+        }
+        x
+    }
+
+    /// The start state at frame `t`: the skinned garment at `t − 1` and `t` (or at `t`
+    /// twice, at rest, when `at_rest` or `t = 0`), pushed out of the body at `t`.
+    pub fn start(&self, t: usize, at_rest: bool) -> Result<State, ModelError> {
+        let surface = weft_body::query::BodySurface::new(&self.body[t], &self.faces)
+            .map_err(|e| ModelError::Body(e.to_string()))?;
+        let mut cur = self.pin_targets(t);
+        let mut prev = if at_rest || t == 0 {
+            cur.clone()
+        } else {
+            self.pin_targets(t - 1)
+        };
+        for x in [&mut cur, &mut prev] {
+            push_out(&surface, x, PUSH_OUT).map_err(|e| {
+                ModelError::Garment(format!("pushing the garment out of the body: {e}"))
+            })?;
+        }
+        Ok(State { prev, cur })
+    }
+
+    /// The graph and the advance of the step `at` from `state`.
+    pub fn step(
+        &self,
+        state: StateRef,
+        at: StepAt,
+        config: &HoodConfig,
+    ) -> Result<(StepGraph, Advance), ModelError> {
+        let t = at.t;
+        let next = if at.settle { t } else { t + 1 };
+        if next >= self.frames() {
+            return Err(ModelError::mismatch(
+                "rollout frame",
+                format!("below {}", self.frames()),
+                next,
+            ));
+        }
+        let targets = self.pin_targets(next);
+        let garment = GarmentStep {
+            prev: state.prev,
+            cur: state.cur,
+            pin_targets: &targets,
+            buttoned: at.buttoned,
+        };
+        let body_prev = if at.settle { t } else { t.saturating_sub(1) };
+        let body = BodyStep {
+            prev: &self.body[body_prev],
+            cur: &self.body[t],
+            next: &self.body[next],
+            faces: &self.faces,
+            omit: &self.omit,
+        };
+        let graph = StepGraph::build(&self.garment, &garment, &body, at.dt, config.body_radius)?;
+        Ok((graph, Advance::new(&self.garment, &garment)))
+    }
+}
+
+/// Body vertices bound mostly (weight > 0.5) to the wrists and hands.
+fn hand_vertices(body: &BodyModel) -> Vec<bool> {
+    let hands: Vec<usize> = HAND_JOINTS
+        .iter()
+        .filter_map(|n| smpl_joint_index(n))
+        .collect();
+    let w = body.weights();
+    (0..w.vertex_count())
+        .map(|v| {
+            w.influences(v)
+                .filter(|(j, _)| hands.contains(j))
+                .map(|(_, x)| x)
+                .sum::<f64>()
+                > 0.5
+        })
+        .collect()
+}

@@ -1,0 +1,360 @@
+//! The configuration of a HOOD run: what it trains on (bodies × procedural garments ×
+//! motions, no simulated data), its curriculum and its loss settings (`[train]` beside
+//! the loop's), and the run type.
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+use weft_models::hood::HoodConfig;
+use weft_models::ModelKind;
+
+use crate::config::TrainConfig;
+use crate::error::{Result, TrainError};
+use crate::optim::{AdamParams, LrScheduleConfig, OptimizerConfig};
+use crate::run_config::{ModelSettings, RunConfig, TaskSettings};
+
+/// HOOD's task settings, in the `[train]` table beside the loop's.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct HoodTraining {
+    /// The body model (an SMPL-format `.npz`); none: weft's built-in body.
+    pub body: Option<PathBuf>,
+    /// Garment kinds drawn (weft-garment's names: skirt, dress, tshirt, …).
+    pub garments: Vec<String>,
+    /// Garment styles per kind (each a seed of weft-garment's style draw).
+    pub styles: usize,
+    /// Vertices of each training garment (about).
+    pub garment_vertices: usize,
+    /// Body shapes of the garment pool (each garment kind and style is built on each).
+    pub shapes: usize,
+    /// Body shapes: the first `shape_components` β are drawn uniformly in
+    /// `[−shape_range, shape_range]` per sample (HOOD's code: ±3 on 10; the paper: ±2).
+    pub shape_range: f64,
+    /// How many β components are drawn (the rest are 0).
+    pub shape_components: usize,
+    /// Procedural motions drawn (weft-motion's names: walk, run, jump, dance, kick,
+    /// raise_arms, twist, bow).
+    pub motions: Vec<String>,
+    /// Motion files (AMASS `.npz`, BVH) drawn beside the procedural ones.
+    pub motion_files: Vec<PathBuf>,
+    /// Frames of each procedural motion (at 30 fps).
+    pub motion_frames: usize,
+    /// The longest rollout of the curriculum (HOOD: 5).
+    pub max_rollout: usize,
+    /// Steps between rollout-length increases (HOOD: 5 000); the rollout starts at 1.
+    pub rollout_every: usize,
+    /// Probability that a sample starts with the settling step (body still, time step
+    /// [`HoodTraining::settle_dt`]) while the rollout is one step long; afterwards every
+    /// sample does (HOOD).
+    pub settle_probability: f64,
+    /// The settling step's length (s; HOOD: 1/3).
+    pub settle_dt: f64,
+    /// Gaussian noise on the start positions (m; HOOD: 3 mm).
+    pub noise: f64,
+    /// The collision term's weight ramps from this (a factor of HOOD's stiffness
+    /// 5·10⁵ J/m³) …
+    pub collision_start: f64,
+    /// … to 1 between these two shares of the run.
+    pub collision_ramp: [f64; 2],
+    /// Share of samples whose garment is made of two materials, split by a random plane
+    /// (HOOD's training never sees heterogeneous materials; run-time maps need it).
+    pub two_materials: f64,
+    /// Validation scenes (held-out shapes, motions and materials) and their frames.
+    pub validation_scenes: usize,
+    /// Frames of each validation rollout.
+    pub validation_frames: usize,
+}
+
+impl HoodTraining {
+    /// Seed 004's training as the reference reads it (garments of about 4 000
+    /// vertices, rollouts up to 5 steps growing every 5 000 steps, the collision ramp
+    /// from a hundredth to full strength over the middle of the run).
+    pub fn paper() -> Self {
+        HoodTraining {
+            body: None,
+            garments: [
+                "tshirt",
+                "tank_top",
+                "long_sleeve",
+                "shorts",
+                "pants",
+                "dress",
+                "skirt",
+            ]
+            .map(String::from)
+            .to_vec(),
+            styles: 4,
+            garment_vertices: 4000,
+            shapes: 16,
+            shape_range: 2.0,
+            shape_components: 2,
+            motions: [
+                "walk",
+                "run",
+                "jump",
+                "dance",
+                "kick",
+                "raise_arms",
+                "twist",
+                "bow",
+            ]
+            .map(String::from)
+            .to_vec(),
+            motion_files: Vec::new(),
+            motion_frames: 150,
+            max_rollout: 5,
+            rollout_every: 5000,
+            settle_probability: 0.5,
+            settle_dt: 1.0 / 3.0,
+            noise: 0.003,
+            collision_start: 0.01,
+            collision_ramp: [0.33, 0.66],
+            two_materials: 0.25,
+            validation_scenes: 4,
+            validation_frames: 60,
+        }
+    }
+
+    /// The CPU preset: garments of about 1 000 vertices (skirt, dress, t-shirt), the
+    /// rollout growing every 600 steps.
+    pub fn cpu() -> Self {
+        HoodTraining {
+            garments: ["skirt", "dress", "tshirt"].map(String::from).to_vec(),
+            styles: 3,
+            garment_vertices: 1000,
+            shapes: 6,
+            rollout_every: 600,
+            motion_frames: 90,
+            validation_scenes: 2,
+            validation_frames: 45,
+            ..HoodTraining::paper()
+        }
+    }
+
+    /// The rollout length after `step` steps.
+    pub fn rollout_at(&self, step: usize) -> usize {
+        (1 + step / self.rollout_every.max(1)).min(self.max_rollout)
+    }
+
+    /// The collision weight's level (0 ..= [`COLLISION_LEVELS`]) after `step` of `total`
+    /// steps: the ramp is taken in steps so that a change is a stage the log names.
+    pub fn collision_level(&self, step: usize, total: usize) -> usize {
+        let s = step as f64 / total.max(1) as f64;
+        let [a, b] = self.collision_ramp;
+        let f = if b > a {
+            ((s - a) / (b - a)).clamp(0.0, 1.0)
+        } else if s >= a {
+            1.0
+        } else {
+            0.0
+        };
+        (f * COLLISION_LEVELS as f64).floor() as usize
+    }
+
+    /// The collision weight of a level: geometric from `collision_start` to 1.
+    pub fn collision_weight(&self, level: usize) -> f64 {
+        let f = level.min(COLLISION_LEVELS) as f64 / COLLISION_LEVELS as f64;
+        self.collision_start.powf(1.0 - f)
+    }
+
+    /// Checks every range; errors name the field as in config.toml.
+    pub fn validate_values(&self) -> Result<()> {
+        for (field, v) in [
+            ("train.styles", self.styles),
+            ("train.shapes", self.shapes),
+            ("train.garment_vertices", self.garment_vertices),
+            ("train.motion_frames", self.motion_frames),
+            ("train.max_rollout", self.max_rollout),
+            ("train.rollout_every", self.rollout_every),
+            ("train.validation_frames", self.validation_frames),
+        ] {
+            if v == 0 {
+                return Err(TrainError::config(field, v, "at least 1"));
+            }
+        }
+        if self.garments.is_empty() {
+            return Err(TrainError::config(
+                "train.garments",
+                "[]",
+                "at least one garment kind",
+            ));
+        }
+        if self.motions.is_empty() && self.motion_files.is_empty() {
+            return Err(TrainError::config(
+                "train.motions",
+                "[]",
+                "at least one procedural motion or motion file",
+            ));
+        }
+        if self.motion_frames < self.max_rollout + 3 {
+            return Err(TrainError::config(
+                "train.motion_frames",
+                self.motion_frames,
+                &format!("at least max_rollout + 3 = {}", self.max_rollout + 3),
+            ));
+        }
+        for (field, v) in [
+            ("train.settle_probability", self.settle_probability),
+            ("train.two_materials", self.two_materials),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(TrainError::config(field, v, "between 0 and 1"));
+            }
+        }
+        for (field, v) in [
+            ("train.settle_dt", self.settle_dt),
+            ("train.collision_start", self.collision_start),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(TrainError::config(field, v, "a positive number"));
+            }
+        }
+        if !(self.noise.is_finite() && self.noise >= 0.0) {
+            return Err(TrainError::config(
+                "train.noise",
+                self.noise,
+                "metres, at least 0",
+            ));
+        }
+        if !(self.shape_range.is_finite() && self.shape_range >= 0.0) {
+            return Err(TrainError::config(
+                "train.shape_range",
+                self.shape_range,
+                "at least 0",
+            ));
+        }
+        let [a, b] = self.collision_ramp;
+        if !(0.0..=1.0).contains(&a) || !(0.0..=1.0).contains(&b) || a > b {
+            return Err(TrainError::config(
+                "train.collision_ramp",
+                format!("[{a}, {b}]"),
+                "two shares of the run, 0 <= start <= end <= 1",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The collision ramp is taken in this many steps.
+pub const COLLISION_LEVELS: usize = 8;
+
+impl Default for HoodTraining {
+    fn default() -> Self {
+        HoodTraining::paper()
+    }
+}
+
+impl TaskSettings for HoodTraining {
+    fn preset(name: &str) -> Result<Self> {
+        match name {
+            "paper" => Ok(HoodTraining::paper()),
+            "cpu" => Ok(HoodTraining::cpu()),
+            other => Err(TrainError::config("preset", other, "one of cpu, paper")),
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        self.validate_values()
+    }
+}
+
+impl ModelSettings for HoodConfig {
+    const KIND: ModelKind = ModelKind::Hood;
+
+    fn preset(name: &str) -> Result<Self> {
+        Ok(HoodConfig::preset(name)?)
+    }
+
+    fn check(&self) -> std::result::Result<(), String> {
+        self.validate().map_err(|e| e.to_string())
+    }
+
+    /// HOOD: Adam 5e-5 halving every 50 000 steps, gradient clipping at norm 1, 150 000
+    /// iterations (`paper`); `cpu`: Adam 1e-3 with cosine decay over 3 000 steps.
+    fn trainer(name: &str) -> Result<TrainConfig> {
+        let base = TrainConfig::preset(name)?;
+        let paper = name == "paper";
+        Ok(TrainConfig {
+            steps: if paper { 150_000 } else { 3000 },
+            learning_rate: if paper { 5e-5 } else { 1e-3 },
+            min_learning_rate: if paper { 5e-7 } else { 1e-5 },
+            optimizer: OptimizerConfig::Adam(AdamParams::default()),
+            lr_schedule: if paper {
+                LrScheduleConfig::Step {
+                    every: 50_000,
+                    factor: 0.5,
+                }
+            } else {
+                LrScheduleConfig::Cosine
+            },
+            batch: 1,
+            grad_clip_norm: Some(1.0),
+            checkpoint_every: if paper { 5000 } else { 250 },
+            validate_every: if paper { 5000 } else { 250 },
+            ..base
+        })
+    }
+}
+
+/// A HOOD run's configuration.
+pub type HoodRun = RunConfig<HoodConfig, HoodTraining>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_ranges_and_schedules() {
+        let cpu = HoodRun::preset("cpu").unwrap();
+        cpu.train.task.validate_values().unwrap();
+        HoodRun::preset("paper")
+            .unwrap()
+            .train
+            .task
+            .validate_values()
+            .unwrap();
+        let t = &cpu.train.task;
+        assert_eq!(t.rollout_at(0), 1);
+        assert_eq!(t.rollout_at(600), 2);
+        assert_eq!(t.rollout_at(100_000), 5);
+        assert_eq!(t.collision_level(0, 3000), 0);
+        assert_eq!(t.collision_level(3000, 3000), COLLISION_LEVELS);
+        assert!((t.collision_weight(0) - 0.01).abs() < 1e-12);
+        assert!((t.collision_weight(COLLISION_LEVELS) - 1.0).abs() < 1e-12);
+        assert!(t.collision_weight(3) < t.collision_weight(4));
+        for (bad, field) in [
+            (
+                HoodTraining {
+                    garments: vec![],
+                    ..HoodTraining::cpu()
+                },
+                "train.garments",
+            ),
+            (
+                HoodTraining {
+                    motion_frames: 5,
+                    ..HoodTraining::cpu()
+                },
+                "train.motion_frames",
+            ),
+            (
+                HoodTraining {
+                    collision_ramp: [0.7, 0.2],
+                    ..HoodTraining::cpu()
+                },
+                "train.collision_ramp",
+            ),
+            (
+                HoodTraining {
+                    noise: -1.0,
+                    ..HoodTraining::cpu()
+                },
+                "train.noise",
+            ),
+        ] {
+            let e = bad.validate_values().unwrap_err().to_string();
+            assert!(e.contains(field), "{e}");
+        }
+        assert!(cpu.to_toml().unwrap().contains("rollout_every"));
+    }
+}

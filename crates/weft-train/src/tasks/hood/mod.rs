@@ -1,0 +1,723 @@
+//! Training HOOD (seed 004) from the physics alone: no simulated data, only bodies,
+//! procedural garments and motions, and the incremental potential of every predicted
+//! step (eq. 5, weft-sim's energies through [`crate::loss::physics_loss`]).
+//!
+//! - Before the first step: a pool of garments (each kind × style built on each of
+//!   `shapes` bodies of random β, in that body's rest pose, weft-garment) and of motions
+//!   (procedural kinds, motion files). The normalisers are fitted on the skinned states of
+//!   the first samples (HOOD's warm-up gathers them the same way) and saved as
+//!   `hood.json`.
+//! - An item is a sample drawn from its index and the run's seed: a garment of the pool,
+//!   a motion and a start frame, a material (HOOD's ranges; a share of samples gets two
+//!   materials split by a plane), 3 mm of noise on the start positions, and with some
+//!   probability a settling step first (body still, 1/3 s). The rollout of the current
+//!   length runs from the skinned garment; every step's state is the previous prediction,
+//!   detached (no backpropagation through time), and the item's loss is the mean over
+//!   its steps of each term of the potential. HOOD steps the optimiser after every
+//!   rollout step; here the steps of one item share one optimiser step, so an item is a
+//!   pure function of its index and the model, and a resumed run repeats it exactly.
+//! - Stages: the rollout length (1 → `max_rollout`, one more every `rollout_every`
+//!   steps) and the collision weight's level (HOOD's ramp of the collision stiffness,
+//!   taken in [`COLLISION_LEVELS`] geometric steps).
+//! - Validation: held-out scenes (new shapes, motions, materials) rolled out over
+//!   `validation_frames` frames; metrics: the mean potential per frame at full collision
+//!   stiffness (primary), the share of garment vertices inside the body, the mean edge
+//!   strain, and the frames reached before any divergence.
+
+pub mod config;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use burn::tensor::{Device, Tensor};
+use weft_body::{BodyModel, Pose};
+use weft_garment::{FitBody, GarmentKind, Style};
+use weft_mesh::rng::SplitMix64;
+use weft_mesh::TriMesh;
+use weft_models::hood::rollout::next_positions;
+use weft_models::hood::{
+    roll_out, Advance, Hood, HoodConfig, HoodInput, HoodStats, HoodStatsFit, Materials,
+    RolloutOptions, Scene, StateRef, StepAt, STATS_FILE,
+};
+use weft_models::Clip;
+use weft_motion::{MotionKind, ProceduralParams};
+use weft_sim::{sample_hood_material, Attachment, Energy, Material, PosedBody, StepInputs};
+
+pub use config::{HoodRun, HoodTraining, COLLISION_LEVELS};
+
+use crate::error::{Result, TrainError};
+use crate::loss::{physics_loss, FrameEnergies, PhysicsImpl, PotentialTerm};
+use crate::task::{LossTerm, Metrics, StepEnd, TrainTask};
+
+/// The validation metric the schedule watches: the mean incremental potential per frame
+/// of the validation rollouts (J), at full collision stiffness.
+pub const POTENTIAL: &str = "potential";
+/// Share of garment vertices inside the body over the validation rollouts (%).
+pub const INSIDE_PERCENT: &str = "inside_percent";
+/// Mean relative edge-length change against the rest shape over the rollouts (%).
+pub const EDGE_STRAIN_PERCENT: &str = "edge_strain_percent";
+/// Share of the validation frames reached before a rollout diverged (%).
+pub const FRAMES_REACHED_PERCENT: &str = "frames_reached_percent";
+
+/// Training items per epoch: samples are drawn from their index, so this only sets how
+/// often the order is reshuffled.
+const ITEMS: usize = 100_000;
+
+/// The terms of seed 004 eq. 5, in the order weft-sim's `ClothModel::step_potential`
+/// builds them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Term {
+    /// StVK stretching.
+    Stretching,
+    /// Dihedral bending.
+    Bending,
+    /// Gravity.
+    Gravity,
+    /// Inertia.
+    Inertia,
+    /// Cubic body collision.
+    Collision,
+    /// Friction against the body.
+    Friction,
+}
+
+impl Term {
+    /// Every term, in the potential's order.
+    pub const ALL: [Term; 6] = [
+        Term::Stretching,
+        Term::Bending,
+        Term::Gravity,
+        Term::Inertia,
+        Term::Collision,
+        Term::Friction,
+    ];
+}
+
+impl LossTerm for Term {
+    fn name(self) -> &'static str {
+        match self {
+            Term::Stretching => "stretching",
+            Term::Bending => "bending",
+            Term::Gravity => "gravity",
+            Term::Inertia => "inertia",
+            Term::Collision => "collision",
+            Term::Friction => "friction",
+        }
+    }
+}
+
+/// Where the curriculum is.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Stage {
+    /// Rollout steps per item.
+    pub rollout: usize,
+    /// The collision weight's level (0 ..= [`COLLISION_LEVELS`]).
+    pub collision: usize,
+}
+
+impl Default for Stage {
+    fn default() -> Self {
+        Stage {
+            rollout: 1,
+            collision: 0,
+        }
+    }
+}
+
+/// A garment of the pool: the mesh on its body, and that body's shape.
+#[derive(Clone, Debug)]
+struct PoolGarment {
+    mesh: TriMesh,
+    betas: Vec<f32>,
+}
+
+/// A motion of the pool.
+#[derive(Clone, Debug)]
+struct PoolMotion {
+    poses: Vec<Pose>,
+    trans: Vec<[f32; 3]>,
+    fps: f64,
+}
+
+/// One drawn sample.
+#[derive(Clone, Debug)]
+struct Sample {
+    garment: usize,
+    motion: usize,
+    /// First frame of the window (the frame before the rollout starts).
+    first: usize,
+    materials: Materials,
+    settle: bool,
+    noise_seed: u64,
+}
+
+/// HOOD's training task; see the module documentation.
+pub struct HoodTask {
+    training: HoodTraining,
+    config: HoodConfig,
+    stats: HoodStats,
+    body: BodyModel,
+    garments: Vec<PoolGarment>,
+    motions: Vec<PoolMotion>,
+    validation: Vec<Scene>,
+    seed: u64,
+    stage: Stage,
+    device: Device,
+}
+
+/// The two-material split of a garment: vertices on the positive side of a random plane
+/// through its centroid take `b`.
+fn two_materials(mesh: &TriMesh, a: Material, b: Material, rng: &mut SplitMix64) -> Materials {
+    let n = mesh.vertex_count().max(1) as f64;
+    let c = mesh.positions.iter().fold([0.0; 3], |s, p| {
+        [s[0] + p[0] / n, s[1] + p[1] / n, s[2] + p[2] / n]
+    });
+    let d = weft_mesh::vec3::normalize_or_zero([
+        rng.uniform(-1.0, 1.0),
+        rng.uniform(-1.0, 1.0),
+        rng.uniform(-1.0, 1.0),
+    ]);
+    Materials::PerVertex(
+        mesh.positions
+            .iter()
+            .map(|p| {
+                if weft_mesh::vec3::dot(weft_mesh::vec3::sub(*p, c), d) > 0.0 {
+                    b
+                } else {
+                    a
+                }
+            })
+            .collect(),
+    )
+}
+
+/// A standard normal draw (Box–Muller).
+fn normal(rng: &mut SplitMix64) -> f64 {
+    let u = rng.unit().max(1e-300);
+    let v = rng.unit();
+    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+}
+
+/// The garment pool: every kind × style on every body shape.
+fn garment_pool(
+    training: &HoodTraining,
+    body: &BodyModel,
+    shapes: &[Vec<f32>],
+    seed: u64,
+) -> Result<Vec<PoolGarment>> {
+    let mut out = Vec::new();
+    for betas in shapes {
+        let b64: Vec<f64> = betas.iter().map(|&b| f64::from(b)).collect();
+        let fit = FitBody::new(body, &b64).map_err(|e| {
+            TrainError::config("train.shape_range", training.shape_range, &e.to_string())
+        })?;
+        for name in &training.garments {
+            let kind = GarmentKind::parse(name)
+                .map_err(|e| TrainError::config("train.garments", name, &e.to_string()))?;
+            for s in 0..training.styles {
+                let style = Style::from_seed(kind, seed.wrapping_add(s as u64));
+                let g = fit
+                    .generate(kind, &style, training.garment_vertices)
+                    .map_err(|e| TrainError::config("train.garments", name, &e.to_string()))?;
+                out.push(PoolGarment {
+                    mesh: g.mesh,
+                    betas: betas.clone(),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The motion pool: each procedural kind (seeded) and each motion file.
+fn motion_pool(training: &HoodTraining, body: &BodyModel, seed: u64) -> Result<Vec<PoolMotion>> {
+    let mut out = Vec::new();
+    for (k, name) in training.motions.iter().enumerate() {
+        let kind = MotionKind::parse(name).ok_or_else(|| {
+            TrainError::config(
+                "train.motions",
+                name,
+                "a procedural motion name (walk, run, jump, dance, kick, raise_arms, twist, bow)",
+            )
+        })?;
+        let mut p = ProceduralParams::new(kind);
+        p.frames = training.motion_frames;
+        p.seed = seed.wrapping_add(k as u64);
+        let m = weft_motion::generate(&p)
+            .map_err(|e| TrainError::config("train.motions", name, &e.to_string()))?;
+        out.push(PoolMotion {
+            poses: m.poses().to_vec(),
+            trans: m.trans().to_vec(),
+            fps: m.fps(),
+        });
+    }
+    for path in &training.motion_files {
+        let joints = weft_motion::body_rest_joints(body, &[]).map_err(|e| {
+            TrainError::config("train.motion_files", path.display(), &e.to_string())
+        })?;
+        let options = weft_motion::MotionFileOptions::for_body(joints, None);
+        let m = weft_motion::load_motion(path, &options, Some(30.0))
+            .map_err(|e| TrainError::config("train.motion_files", path.display(), &e.to_string()))?
+            .motion;
+        if m.poses().len() < training.max_rollout + 3 {
+            return Err(TrainError::config(
+                "train.motion_files",
+                path.display(),
+                &format!("a motion of at least {} frames", training.max_rollout + 3),
+            ));
+        }
+        out.push(PoolMotion {
+            poses: m.poses().to_vec(),
+            trans: m.trans().to_vec(),
+            fps: m.fps(),
+        });
+    }
+    Ok(out)
+}
+
+/// `count` shapes drawn in the training range.
+fn shapes(training: &HoodTraining, count: usize, rng: &mut SplitMix64) -> Vec<Vec<f32>> {
+    (0..count)
+        .map(|_| {
+            (0..training.shape_components)
+                .map(|_| rng.uniform(-training.shape_range, training.shape_range) as f32)
+                .collect()
+        })
+        .collect()
+}
+
+impl HoodTask {
+    /// The task for `config` and `training` on `body`; fits the normalisers unless
+    /// `stats` is given (a resumed run's own).
+    pub fn new(
+        config: &HoodConfig,
+        training: &HoodTraining,
+        body: BodyModel,
+        stats: Option<HoodStats>,
+        seed: u64,
+        device: &Device,
+    ) -> Result<Self> {
+        training.validate_values()?;
+        let mut rng = SplitMix64::new(seed ^ 0x4F0D_5EED);
+        let train_shapes = shapes(training, training.shapes.max(1), &mut rng);
+        let garments = garment_pool(training, &body, &train_shapes, seed)?;
+        let motions = motion_pool(training, &body, seed)?;
+        let mut task = HoodTask {
+            training: training.clone(),
+            config: config.clone(),
+            stats: HoodStats {
+                node: weft_nn::FeatureNormalizer {
+                    mean: vec![],
+                    std: vec![],
+                },
+                mesh: weft_nn::FeatureNormalizer {
+                    mean: vec![],
+                    std: vec![],
+                },
+                body: weft_nn::FeatureNormalizer {
+                    mean: vec![],
+                    std: vec![],
+                },
+                output: weft_nn::FeatureNormalizer {
+                    mean: vec![],
+                    std: vec![],
+                },
+            },
+            body,
+            garments,
+            motions,
+            validation: Vec::new(),
+            seed,
+            stage: Stage::default(),
+            device: device.clone(),
+        };
+        task.validation = task.validation_scenes(&mut rng)?;
+        task.stats = match stats {
+            Some(s) => s,
+            None => task.fit_stats()?,
+        };
+        Ok(task)
+    }
+
+    /// The normalisers, as saved beside the checkpoints.
+    pub fn stats(&self) -> &HoodStats {
+        &self.stats
+    }
+
+    /// (garments in the pool, motions, validation scenes).
+    pub fn describe(&self) -> (usize, usize, usize) {
+        (
+            self.garments.len(),
+            self.motions.len(),
+            self.validation.len(),
+        )
+    }
+
+    /// Sample `item`, drawn from the run's seed.
+    fn sample(&self, item: usize, rollout: usize) -> Sample {
+        let mut rng = SplitMix64::new(
+            self.seed
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                .wrapping_add(item as u64),
+        );
+        let garment = rng.below(self.garments.len());
+        let motion = rng.below(self.motions.len());
+        let frames = self.motions[motion].poses.len();
+        // The window: frame `first` (t − 1), the start `first + 1`, and `rollout` more.
+        let first = rng.below(frames - rollout - 1);
+        let a = sample_hood_material(&mut rng);
+        let materials = if rng.unit() < self.training.two_materials {
+            let b = sample_hood_material(&mut rng);
+            two_materials(&self.garments[garment].mesh, a, b, &mut rng)
+        } else {
+            Materials::Uniform(a)
+        };
+        let settle = rollout > 1 || rng.unit() < self.training.settle_probability;
+        Sample {
+            garment,
+            motion,
+            first,
+            materials,
+            settle,
+            noise_seed: rng.next_u64(),
+        }
+    }
+
+    /// The scene of a window of `frames` frames of a pool motion from `first`.
+    fn scene(
+        &self,
+        garment: usize,
+        motion: usize,
+        first: usize,
+        frames: usize,
+        materials: &Materials,
+    ) -> Result<Scene> {
+        let g = &self.garments[garment];
+        let m = &self.motions[motion];
+        let end = (first + frames).min(m.poses.len());
+        let clip = Clip {
+            betas: &g.betas,
+            poses: &m.poses[first..end],
+            trans: &m.trans[first..end],
+            fps: m.fps,
+        };
+        Ok(Scene::new(
+            &g.mesh,
+            &self.body,
+            &clip,
+            materials,
+            Attachment::TopOpening,
+            &self.config,
+        )?)
+    }
+
+    /// Held-out scenes: new shapes (drawn after the training ones), every motion in turn
+    /// from its start, HOOD's default material and a silk–denim garment in turn.
+    fn validation_scenes(&self, rng: &mut SplitMix64) -> Result<Vec<Scene>> {
+        let shapes = shapes(&self.training, self.training.validation_scenes, rng);
+        let mut out = Vec::new();
+        for (k, betas) in shapes.iter().enumerate() {
+            let kind = &self.training.garments[k % self.training.garments.len()];
+            let b64: Vec<f64> = betas.iter().map(|&b| f64::from(b)).collect();
+            let fit = FitBody::new(&self.body, &b64).map_err(|e| {
+                TrainError::config(
+                    "train.shape_range",
+                    self.training.shape_range,
+                    &e.to_string(),
+                )
+            })?;
+            let parsed = GarmentKind::parse(kind)
+                .map_err(|e| TrainError::config("train.garments", kind, &e.to_string()))?;
+            let style = Style::from_seed(parsed, self.seed.wrapping_add(1000 + k as u64));
+            let mesh = fit
+                .generate(parsed, &style, self.training.garment_vertices)
+                .map_err(|e| TrainError::config("train.garments", kind, &e.to_string()))?
+                .mesh;
+            let m = &self.motions[k % self.motions.len()];
+            let end = self.training.validation_frames.min(m.poses.len());
+            let clip = Clip {
+                betas,
+                poses: &m.poses[..end],
+                trans: &m.trans[..end],
+                fps: m.fps,
+            };
+            let materials = if k % 2 == 0 {
+                Materials::Uniform(Material::hood())
+            } else {
+                let mut split = SplitMix64::new(k as u64);
+                two_materials(&mesh, Material::silk(), Material::denim(), &mut split)
+            };
+            out.push(Scene::new(
+                &mesh,
+                &self.body,
+                &clip,
+                &materials,
+                Attachment::TopOpening,
+                &self.config,
+            )?);
+        }
+        Ok(out)
+    }
+
+    /// The normalisers from the skinned states of the first samples: inputs of the step
+    /// from the skinned garment, outputs the skinned garment's acceleration.
+    fn fit_stats(&self) -> Result<HoodStats> {
+        let mut fit = HoodStatsFit::new(self.config.levels)?;
+        let samples = 32.min(ITEMS);
+        for item in 0..samples {
+            let s = self.sample(item, 1);
+            let scene = self.scene(s.garment, s.motion, s.first, 3, &s.materials)?;
+            let start = scene.start(1, false)?;
+            let at = StepAt {
+                t: 1,
+                settle: false,
+                dt: scene.dt,
+                buttoned: true,
+            };
+            let (graph, _) = scene.step(start.as_ref(), at, &self.config)?;
+            let (prev, cur) = (&start.prev, &start.cur);
+            let next = scene.pin_targets(2);
+            let mut accel = Vec::with_capacity(3 * cur.len());
+            for i in (0..cur.len()).filter(|&i| !scene.garment.pinned[i]) {
+                accel.extend((0..3).map(|k| (next[i][k] - 2.0 * cur[i][k] + prev[i][k]) as f32));
+            }
+            fit.observe(&graph, &accel)?;
+        }
+        Ok(fit.finish()?)
+    }
+
+    /// The potential of step `at` of `scene` from `cur` (inertial target from
+    /// `advance`), each term with its weight.
+    fn potential_terms(
+        &self,
+        scene: &Scene,
+        cur: &[[f64; 3]],
+        advance: &Advance,
+        at: StepAt,
+        collision_weight: f64,
+    ) -> Result<Vec<Arc<dyn Energy + Send + Sync>>> {
+        let mut body = PosedBody::new(&scene.body[at.t], &scene.faces)?;
+        if !at.settle {
+            body.refit(&scene.body[at.t + 1])?;
+        }
+        let dt = at.dt;
+        let target = advance.inertial_target();
+        let stiffness = scene.cloth.options().collision_stiffness * collision_weight;
+        let potential = scene.cloth.step_potential(&StepInputs {
+            start: cur,
+            target: &target,
+            dt,
+            pinned: &scene.garment.pinned,
+            body: Some(&body),
+            collision_stiffness: Some(stiffness),
+        })?;
+        Ok(PotentialTerm::all(potential))
+    }
+}
+
+fn host_positions(x: &Tensor<2>) -> Result<Vec<[f64; 3]>> {
+    let flat: Vec<f32> = x
+        .to_data()
+        .convert::<f32>()
+        .try_into_vec::<f32>()
+        .map_err(|source| TrainError::Tensor {
+            what: "HOOD's predicted positions",
+            source,
+        })?;
+    Ok(flat
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]].map(f64::from))
+        .collect())
+}
+
+impl TrainTask for HoodTask {
+    type Model = Hood;
+    type Term = Term;
+    type Stage = Stage;
+
+    fn item_count(&self) -> usize {
+        ITEMS
+    }
+
+    fn terms(&self, _stage: &Stage) -> Vec<(Term, f64)> {
+        Term::ALL.iter().map(|&t| (t, 1.0)).collect()
+    }
+
+    fn losses(&mut self, model: &Hood, item: usize, terms: &[Term]) -> Result<Vec<Tensor<1>>> {
+        let rollout = self.stage.rollout;
+        let s = self.sample(item, rollout);
+        let scene = self.scene(s.garment, s.motion, s.first, rollout + 2, &s.materials)?;
+        let start = scene.start(1, s.settle)?;
+        let (mut prev, mut cur) = (start.prev, start.cur);
+        // Position noise on the free vertices, the same offset at t − 1 and t.
+        let mut rng = SplitMix64::new(s.noise_seed);
+        for i in 0..cur.len() {
+            if scene.garment.pinned[i] {
+                continue;
+            }
+            let d: [f64; 3] = std::array::from_fn(|_| self.training.noise * normal(&mut rng));
+            for k in 0..3 {
+                prev[i][k] += d[k];
+                cur[i][k] += d[k];
+            }
+        }
+        let weight = self.training.collision_weight(self.stage.collision);
+        let mut sums: Vec<Option<Tensor<1>>> = vec![None; terms.len()];
+        let mut t = 1;
+        for k in 0..rollout {
+            let settle = s.settle && k == 0;
+            let dt = if settle {
+                self.training.settle_dt
+            } else {
+                scene.dt
+            };
+            let at = StepAt {
+                t,
+                settle,
+                dt,
+                buttoned: true,
+            };
+            let state = StateRef {
+                prev: &prev,
+                cur: &cur,
+            };
+            let (graph, advance) = scene.step(state, at, &self.config)?;
+            let out = model.forward(HoodInput::new(&[&graph], &self.stats, &self.device)?)?;
+            let x = next_positions(out, &[&advance], &self.stats, &self.device)?;
+            let n = graph.garment_nodes;
+            let potential = self.potential_terms(&scene, &cur, &advance, at, weight)?;
+            let x3 = x.clone().reshape([1, n, 3]);
+            for (slot, term) in sums.iter_mut().zip(terms) {
+                let index = Term::ALL.iter().position(|a| a == term).unwrap_or(0);
+                let energy = potential.get(index).cloned().ok_or_else(|| {
+                    TrainError::config("train", term.name(), "a term of the potential")
+                })?;
+                let loss = physics_loss(
+                    x3.clone(),
+                    &Arc::new(FrameEnergies::per_frame(vec![energy])?),
+                    PhysicsImpl::Auto,
+                )?;
+                *slot = Some(match slot.take() {
+                    Some(s) => s + loss,
+                    None => loss,
+                });
+            }
+            let next = host_positions(&x)?;
+            if settle {
+                prev = next.clone();
+            } else {
+                prev = cur;
+                t += 1;
+            }
+            cur = next;
+        }
+        Ok(sums
+            .into_iter()
+            .map(|s| s.map(|s| s.div_scalar(rollout as f64)))
+            .collect::<Option<Vec<_>>>()
+            .unwrap_or_default())
+    }
+
+    fn validate(&mut self, model: &Hood) -> Result<Metrics> {
+        let scenes: Vec<&Scene> = self.validation.iter().collect();
+        let options = RolloutOptions {
+            settle_dt: self.training.settle_dt,
+            ..RolloutOptions::default()
+        };
+        let rollouts = roll_out(
+            model,
+            &self.stats,
+            &self.config,
+            &scenes,
+            &options,
+            &self.device,
+        )?;
+        let (mut potential, mut steps) = (0.0, 0usize);
+        let (mut inside, mut vertices) = (0usize, 0usize);
+        let (mut strain, mut edges) = (0.0, 0usize);
+        let (mut reached, mut wanted) = (0usize, 0usize);
+        for (scene, r) in scenes.iter().zip(&rollouts) {
+            wanted += scene.frames();
+            reached += r.frames.len();
+            let rest_edges = scene.garment.rest.edges();
+            let rest = &scene.garment.rest.positions;
+            for (t, x) in r.frames.iter().enumerate() {
+                let body = PosedBody::new(&scene.body[t], &scene.faces)?;
+                inside += body.penetration(x, 0.0)?.count;
+                vertices += x.len();
+                for &[a, b] in &rest_edges {
+                    let l0 = weft_mesh::vec3::dist(rest[a as usize], rest[b as usize]);
+                    let l = weft_mesh::vec3::dist(x[a as usize], x[b as usize]);
+                    if l0 > 0.0 {
+                        strain += (l / l0 - 1.0).abs();
+                        edges += 1;
+                    }
+                }
+                if t >= 1 {
+                    let prev = if t >= 2 {
+                        &r.frames[t - 2]
+                    } else {
+                        &r.frames[t - 1]
+                    };
+                    let cur = &r.frames[t - 1];
+                    let at = StepAt {
+                        t: t - 1,
+                        settle: false,
+                        dt: scene.dt,
+                        buttoned: true,
+                    };
+                    let (_, advance) = scene.step(StateRef { prev, cur }, at, &self.config)?;
+                    let terms = self.potential_terms(scene, cur, &advance, at, 1.0)?;
+                    potential += terms
+                        .iter()
+                        .map(|e| e.value(x))
+                        .sum::<std::result::Result<f64, _>>()?;
+                    steps += 1;
+                }
+            }
+        }
+        let pct = |a: f64, b: usize| 100.0 * a / b.max(1) as f64;
+        Ok(BTreeMap::from([
+            (POTENTIAL.to_string(), potential / steps.max(1) as f64),
+            (INSIDE_PERCENT.to_string(), pct(inside as f64, vertices)),
+            (EDGE_STRAIN_PERCENT.to_string(), pct(strain, edges)),
+            (
+                FRAMES_REACHED_PERCENT.to_string(),
+                pct(reached as f64, wanted),
+            ),
+        ]))
+    }
+
+    fn primary_metric(&self) -> &'static str {
+        POTENTIAL
+    }
+
+    fn stage_name(&self, stage: &Stage) -> String {
+        format!(
+            "rollout {}, collision weight {:.3}",
+            stage.rollout,
+            self.training.collision_weight(stage.collision)
+        )
+    }
+
+    fn advance(&self, stage: &mut Stage, end: &StepEnd<'_, Term>) -> bool {
+        let next = Stage {
+            rollout: self.training.rollout_at(end.step),
+            collision: self.training.collision_level(end.step, end.total),
+        };
+        let changed = next != *stage;
+        *stage = next;
+        changed
+    }
+
+    fn enter_stage(&mut self, model: Hood, stage: &Stage) -> Hood {
+        self.stage = stage.clone();
+        model
+    }
+}
+
+/// Saves the normalisers as `dir/hood.json` (atomically).
+pub fn save_stats(dir: &Path, stats: &HoodStats) -> Result<()> {
+    crate::run::save_json(dir, STATS_FILE, stats)
+}
