@@ -115,10 +115,19 @@ impl Mlp {
     /// `x`: `[B, d_input]` → `[B, widths.last]`.
     pub fn forward(&self, x: Tensor<2>) -> crate::Result<Tensor<2>> {
         check_shape("MLP input", &[ANY, self.input_width()], &x.dims())?;
+        Ok(self.after_first_linear(self.layers[0].forward(x)))
+    }
+
+    /// The rest of [`Self::forward`] from the first linear layer's output `x W₀ + b₀`
+    /// (`[B, widths[0]]`): for callers that form that product in parts (the graph net
+    /// block's edge MLPs multiply the node rows once per node, not once per edge).
+    pub(crate) fn after_first_linear(&self, first: Tensor<2>) -> Tensor<2> {
         let last = self.layers.len() - 1;
-        let mut h = x;
+        let mut h = first;
         for (k, layer) in self.layers.iter().enumerate() {
-            h = layer.forward(h);
+            if k > 0 {
+                h = layer.forward(h);
+            }
             if let Some(norm) = self.norms.get(k) {
                 h = norm.forward(h);
             }
@@ -131,7 +140,7 @@ impl Mlp {
         if let Some(norm) = &self.layer_norm {
             h = norm.forward(h);
         }
-        Ok(h)
+        h
     }
 }
 
