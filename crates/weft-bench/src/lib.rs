@@ -26,6 +26,7 @@ pub mod device;
 pub mod error;
 pub mod garfitnet;
 pub mod gat;
+pub mod hood;
 pub mod multilevel;
 pub mod multiresgnet;
 mod refine;

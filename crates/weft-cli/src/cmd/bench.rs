@@ -10,6 +10,7 @@ use serde::Serialize;
 use weft_bench::densegats::DenseGatsBench;
 use weft_bench::garfitnet::GarFitNetBench;
 use weft_bench::gat::GatBench;
+use weft_bench::hood::HoodBench;
 use weft_bench::multilevel::MultilevelBench;
 use weft_bench::multiresgnet::MultiResGnetBench;
 use weft_bench::simulate::bench_simulate;
@@ -38,6 +39,10 @@ pub enum BenchCommand {
     /// GarFitNet (seed 001 ch. 4) on the benchmark skirt, one frame per stage (posed body,
     /// coarse regressor, refinement; the pair's one-off preparation apart) in ms.
     Garfitnet(RefineArgs),
+    /// HOOD (seed 004) on the benchmark skirt over the walking body, one rollout step per
+    /// stage (step graph, inputs, network, whole step) in ms, at each batch of garments
+    /// advanced together; the scene's one-off preparation apart.
+    Hood(HoodArgs),
     /// The cloth simulator: seconds, Newton and PCG iterations per frame, edge strain
     /// and depth in the body.
     Simulate(SimulateArgs),
@@ -138,6 +143,24 @@ pub struct RefineArgs {
 }
 
 #[derive(Args)]
+pub struct HoodArgs {
+    /// Model preset: cpu or paper.
+    #[arg(long, default_value = "paper")]
+    preset: String,
+    /// Vertices of the skirt (several: 4000,12000).
+    #[arg(long, value_delimiter = ',', default_value = "4000")]
+    vertices: Vec<usize>,
+    /// Garments advanced in one forward pass (several: 1,16).
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    batch: Vec<usize>,
+    /// Timed runs per figure, after one warm-up (the median is reported).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=10000))]
+    reps: u32,
+    #[command(flatten)]
+    common: Common,
+}
+
+#[derive(Args)]
 pub struct SimulateArgs {
     /// The garment (.obj/.ply) fitted to the body in its rest pose; default: a skirt of
     /// --vertices vertices.
@@ -167,6 +190,7 @@ pub fn run(command: BenchCommand) -> Result<()> {
         BenchCommand::Gat(a) => gat(&a),
         BenchCommand::Densegats(a) => densegats(&a),
         BenchCommand::Garfitnet(a) => garfitnet(&a),
+        BenchCommand::Hood(a) => hood(&a),
         BenchCommand::Multiresgnet(a) => multiresgnet(&a),
         BenchCommand::Simulate(a) => simulate(&a),
     }
@@ -272,6 +296,27 @@ fn garfitnet(args: &RefineArgs) -> Result<()> {
         let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
         spinner.finish_and_clear();
         out.row(&figures.with_context(|| label.clone())?)?;
+    }
+    Ok(())
+}
+
+fn hood(args: &HoodArgs) -> Result<()> {
+    let (body, _) = args.common.body.load()?;
+    let mut out = Output::new(args.common.json);
+    for &vertices in &args.vertices {
+        for &batch in &args.batch {
+            let bench = HoodBench {
+                preset: args.preset.clone(),
+                vertices,
+                batch,
+                reps: args.reps as usize,
+            };
+            let label = format!("hood {} N≈{vertices} batch {batch}", args.preset);
+            let spinner = spinner(&label);
+            let figures = bench.run(&body, &mut |stage| spinner.set_message(stage.to_string()));
+            spinner.finish_and_clear();
+            out.row(&figures.with_context(|| label.clone())?)?;
+        }
     }
     Ok(())
 }

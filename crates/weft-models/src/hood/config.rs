@@ -8,6 +8,7 @@
 //! `"0 x15"` and `"0 x48"` with the same network.
 
 use burn::config::Config;
+use burn::module::Param;
 use burn::tensor::Device;
 use weft_nn::{MlpConfig, ProcessorConfig};
 
@@ -145,10 +146,22 @@ impl HoodConfig {
             processor: ProcessorConfig::new(self.latent, self.levels + 1, steps)
                 .with_hidden_layers(self.hidden_layers)
                 .init(device)?,
-            decoder: self.mlp(self.latent, 3, false).init(device)?,
+            decoder: zero_last_layer(self.mlp(self.latent, 3, false).init(device)?),
             levels: self.levels,
         })
     }
+}
+
+/// `mlp` with its output layer's weights and bias at zero: an untrained HOOD predicts
+/// the mean acceleration, so its first rollouts coast (`x_t + v_t`) instead of adding
+/// noise that a rollout integrates twice into an exploding garment.
+fn zero_last_layer(mut mlp: weft_nn::Mlp) -> weft_nn::Mlp {
+    // New parameters (not `Param::map`, which would keep the zeros out of autodiff).
+    if let Some(last) = mlp.layers.last_mut() {
+        last.weight = Param::from_tensor(last.weight.val().zeros_like());
+        last.bias = last.bias.take().map(|b| Param::from_tensor(b.val().zeros_like()));
+    }
+    mlp
 }
 
 /// Parses `text` (module documentation) for a hierarchy of `levels` levels.
@@ -197,6 +210,22 @@ pub fn parse_schedule(text: &str, levels: usize) -> Result<Schedule, ModelError>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_untrained_decoder_outputs_zero_and_learns() {
+        use burn::tensor::{Distribution, Tensor};
+        let device = weft_nn::backend::cpu_autodiff();
+        let cfg = HoodConfig::preset("cpu").unwrap();
+        let model = cfg.init(&device).unwrap();
+        let h = Tensor::<2>::random([5, cfg.latent], Distribution::Normal(0.0, 1.0), &device);
+        let out = model.decoder.forward(h).unwrap();
+        assert_eq!(out.clone().abs().sum().into_scalar::<f32>(), 0.0);
+        // The zeroed layer still takes gradients (a constant would never leave zero).
+        let grads = (out.sum() + 1.0).backward();
+        let last = model.decoder.layers.last().unwrap();
+        let g = last.bias.as_ref().unwrap().grad(&grads).expect("bias gradient");
+        assert!(g.abs().sum().into_scalar::<f32>() > 0.0);
+    }
 
     #[test]
     fn schedules_parse_and_give_the_papers_radius() {

@@ -60,6 +60,9 @@ pub const EDGE_STRAIN_PERCENT: &str = "edge_strain_percent";
 /// Share of the validation frames reached before a rollout diverged (%).
 pub const FRAMES_REACHED_PERCENT: &str = "frames_reached_percent";
 
+/// Samples the normalisers are fitted on (HOOD's warm-up: 100 iterations).
+const STATS_SAMPLES: usize = 64;
+
 /// Training items per epoch: samples are drawn from their index, so this only sets how
 /// often the order is reshuffled.
 const ITEMS: usize = 100_000;
@@ -460,24 +463,29 @@ impl HoodTask {
         Ok(out)
     }
 
-    /// The normalisers from the skinned states of the first samples: inputs of the step
-    /// from the skinned garment, outputs the skinned garment's acceleration.
+    /// The normalisers from the skinned states of the first samples, as drawn (the
+    /// settling steps included, so the time step is a feature the network can read):
+    /// inputs of the step from the skinned garment, outputs the skinned garment's
+    /// acceleration over it (zero for a settling step: the body holds still).
     fn fit_stats(&self) -> Result<HoodStats> {
         let mut fit = HoodStatsFit::new(self.config.levels)?;
-        let samples = 32.min(ITEMS);
-        for item in 0..samples {
+        for item in 0..STATS_SAMPLES {
             let s = self.sample(item, 1);
             let scene = self.scene(s.garment, s.motion, s.first, 3, &s.materials)?;
-            let start = scene.start(1, false)?;
+            let start = scene.start(1, s.settle)?;
             let at = StepAt {
                 t: 1,
-                settle: false,
-                dt: scene.dt,
+                settle: s.settle,
+                dt: if s.settle {
+                    self.training.settle_dt
+                } else {
+                    scene.dt
+                },
                 buttoned: true,
             };
             let (graph, _) = scene.step(start.as_ref(), at, &self.config)?;
             let (prev, cur) = (&start.prev, &start.cur);
-            let next = scene.pin_targets(2);
+            let next = scene.pin_targets(if s.settle { 1 } else { 2 });
             let mut accel = Vec::with_capacity(3 * cur.len());
             for i in (0..cur.len()).filter(|&i| !scene.garment.pinned[i]) {
                 accel.extend((0..3).map(|k| (next[i][k] - 2.0 * cur[i][k] + prev[i][k]) as f32));

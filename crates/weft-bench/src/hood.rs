@@ -1,0 +1,205 @@
+//! `weft bench hood`: one rollout step of HOOD (seed 004) on the benchmark skirt of about
+//! `vertices` vertices over the walking body, per stage, as `weft animate` runs it: the
+//! step graph (body edges by nearest body vertex, features of nodes and of every level's
+//! edges), the inputs as tensors (normalised), the network, the integration to
+//! `x_{t+1}`, and the whole step; with `batch` garments advanced in one forward pass, the
+//! rollout steps per second of the batch. The scene (posing the body, the garment's
+//! hierarchy, skinning) is timed apart: a clip pays it once.
+//!
+//! The network runs as burn layers on the flex CPU backend. Reference (issue 12): the
+//! public HOOD network at 4 000 vertices takes 710 ms per step with PyTorch at 2 threads.
+
+use std::hint::black_box;
+
+use serde::Serialize;
+use weft_body::BodyModel;
+use weft_models::hood::features::StepGraph;
+use weft_models::hood::rollout::{next_positions, Advance};
+use weft_models::hood::{HoodConfig, HoodInput, HoodStats, Materials, Scene, StepAt};
+use weft_models::Clip;
+use weft_motion::{generate, MotionKind, ProceduralParams};
+use weft_nn::backend::cpu;
+use weft_nn::FeatureNormalizer;
+use weft_sim::{Attachment, Material};
+
+use crate::timing::try_median_ms;
+use crate::{skirt, BenchError, Row};
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct HoodBench {
+    /// Model preset: cpu or paper.
+    pub preset: String,
+    /// Vertices of the garment.
+    pub vertices: usize,
+    /// Garments advanced in one forward pass.
+    pub batch: usize,
+    /// Timed runs per figure.
+    pub reps: usize,
+}
+
+/// One rollout step, per stage, ms.
+#[derive(Clone, Debug, Serialize)]
+pub struct HoodFigures {
+    /// `"hood"`.
+    pub bench: &'static str,
+    /// The preset.
+    pub preset: String,
+    /// Vertices of one garment.
+    pub vertices: usize,
+    /// Garments per forward pass.
+    pub batch: usize,
+    /// Threads of the pool.
+    pub threads: usize,
+    /// Parameters of the network.
+    pub parameters: usize,
+    /// Directed mesh edges of each level of one garment.
+    pub level_edges: Vec<usize>,
+    /// Body edges (both directions) of one garment at the timed frame.
+    pub body_edges: usize,
+    /// Once per garment and clip: posed body, hierarchy, skinning, physics.
+    pub scene_ms: f64,
+    /// The step graph of every garment of the batch.
+    pub graph_ms: f64,
+    /// The batch's inputs as normalised tensors.
+    pub inputs_ms: f64,
+    /// The network (encoders, message passing, decoder), inputs included.
+    pub network_ms: f64,
+    /// Graphs, network and integration: one rollout step of the batch.
+    pub step_ms: f64,
+    /// Garment rollout steps per second (`batch` per step).
+    pub steps_per_s: f64,
+}
+
+impl Row for HoodFigures {
+    fn cells(&self) -> Vec<(&'static str, String)> {
+        vec![
+            ("preset", self.preset.clone()),
+            ("N", self.vertices.to_string()),
+            ("batch", self.batch.to_string()),
+            ("params", self.parameters.to_string()),
+            ("scene (once)", format!("{:.0}", self.scene_ms)),
+            ("graph", format!("{:.1}", self.graph_ms)),
+            ("inputs", format!("{:.1}", self.inputs_ms)),
+            ("network", format!("{:.1}", self.network_ms)),
+            ("step ms", format!("{:.1}", self.step_ms)),
+            ("steps/s", format!("{:.2}", self.steps_per_s)),
+        ]
+    }
+}
+
+/// Normalisers that change nothing: the cost does not depend on the statistics.
+fn identity(levels: usize) -> HoodStats {
+    let n = |w: usize| FeatureNormalizer {
+        mean: vec![0.0; w],
+        std: vec![1.0; w],
+    };
+    HoodStats {
+        node: n(StepGraph::node_width(levels)),
+        mesh: n(StepGraph::MESH_WIDTH),
+        body: n(StepGraph::BODY_WIDTH),
+        output: n(3),
+    }
+}
+
+impl HoodBench {
+    /// Runs the bench on the skirt fitted to `body`, walking.
+    pub fn run(
+        &self,
+        body: &BodyModel,
+        progress: &mut dyn FnMut(&str),
+    ) -> Result<HoodFigures, BenchError> {
+        let cfg = HoodConfig::preset(&self.preset).map_err(|e| BenchError::Option {
+            what: "--preset",
+            message: e.to_string(),
+        })?;
+        if self.batch == 0 {
+            return Err(BenchError::Option {
+                what: "--batch",
+                message: "at least 1 garment per pass".into(),
+            });
+        }
+        progress("scene");
+        let mesh = skirt(body, self.vertices)?;
+        let mut walk = ProceduralParams::new(MotionKind::Walk);
+        walk.frames = 8;
+        let motion = generate(&walk).map_err(BenchError::stage("the walk"))?;
+        let clip = Clip {
+            betas: &[],
+            poses: motion.poses(),
+            trans: motion.trans(),
+            fps: motion.fps(),
+        };
+        let materials = Materials::Uniform(Material::hood());
+        let new_scene = || Scene::new(&mesh, body, &clip, &materials, Attachment::TopOpening, &cfg);
+        let scene_ms = try_median_ms(self.reps.min(3), || new_scene().map(drop))
+            .map_err(BenchError::stage("the scene"))?;
+        let scene = new_scene().map_err(BenchError::stage("the scene"))?;
+        let start = scene
+            .start(3, false)
+            .map_err(BenchError::stage("the start state"))?;
+        let at = StepAt {
+            t: 3,
+            settle: false,
+            dt: scene.dt,
+            buttoned: true,
+        };
+        let graphs = || -> Result<Vec<(StepGraph, Advance)>, weft_models::ModelError> {
+            (0..self.batch)
+                .map(|_| scene.step(start.as_ref(), at, &cfg))
+                .collect()
+        };
+        progress("step graph");
+        let graph_ms = try_median_ms(self.reps, || graphs().map(|g| drop(black_box(g))))
+            .map_err(BenchError::stage("the step graph"))?;
+        let built = graphs().map_err(BenchError::stage("the step graph"))?;
+        let refs: Vec<&StepGraph> = built.iter().map(|(g, _)| g).collect();
+        let advances: Vec<&Advance> = built.iter().map(|(_, a)| a).collect();
+        let device = cpu();
+        let stats = identity(cfg.levels);
+        let model = cfg
+            .init(&device)
+            .map_err(BenchError::stage("the network"))?;
+        progress("inputs");
+        let inputs_ms = try_median_ms(self.reps, || {
+            HoodInput::new(&refs, &stats, &device).map(|x| drop(black_box(x)))
+        })
+        .map_err(BenchError::stage("the inputs"))?;
+        progress("network");
+        let network_ms = try_median_ms(self.reps, || {
+            let out = model.forward(HoodInput::new(&refs, &stats, &device)?)?;
+            drop(black_box(out.into_data()));
+            Ok::<(), weft_models::ModelError>(())
+        })
+        .map_err(BenchError::stage("the network"))?;
+        progress("step");
+        let step_ms = try_median_ms(self.reps, || {
+            let built = graphs()?;
+            let refs: Vec<&StepGraph> = built.iter().map(|(g, _)| g).collect();
+            let advances: Vec<&Advance> = built.iter().map(|(_, a)| a).collect();
+            let out = model.forward(HoodInput::new(&refs, &stats, &device)?)?;
+            let x = next_positions(out, &advances, &stats, &device)?;
+            drop(black_box(x.into_data()));
+            Ok::<(), weft_models::ModelError>(())
+        })
+        .map_err(BenchError::stage("one step"))?;
+        drop(advances);
+        let one = &built[0].0;
+        Ok(HoodFigures {
+            bench: "hood",
+            preset: self.preset.clone(),
+            vertices: mesh.vertex_count(),
+            batch: self.batch,
+            threads: rayon::current_num_threads(),
+            parameters: burn::module::Module::num_params(&model),
+            level_edges: one.mesh.iter().map(|(e, _)| e.len()).collect(),
+            body_edges: one.body.0.len(),
+            scene_ms,
+            graph_ms,
+            inputs_ms,
+            network_ms,
+            step_ms,
+            steps_per_s: 1e3 * self.batch as f64 / step_ms,
+        })
+    }
+}
