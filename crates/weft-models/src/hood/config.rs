@@ -159,7 +159,10 @@ fn zero_last_layer(mut mlp: weft_nn::Mlp) -> weft_nn::Mlp {
     // New parameters (not `Param::map`, which would keep the zeros out of autodiff).
     if let Some(last) = mlp.layers.last_mut() {
         last.weight = Param::from_tensor(last.weight.val().zeros_like());
-        last.bias = last.bias.take().map(|b| Param::from_tensor(b.val().zeros_like()));
+        last.bias = last
+            .bias
+            .take()
+            .map(|b| Param::from_tensor(b.val().zeros_like()));
     }
     mlp
 }
@@ -223,7 +226,12 @@ mod tests {
         // The zeroed layer still takes gradients (a constant would never leave zero).
         let grads = (out.sum() + 1.0).backward();
         let last = model.decoder.layers.last().unwrap();
-        let g = last.bias.as_ref().unwrap().grad(&grads).expect("bias gradient");
+        let g = last
+            .bias
+            .as_ref()
+            .unwrap()
+            .grad(&grads)
+            .expect("bias gradient");
         assert!(g.abs().sum().into_scalar::<f32>() > 0.0);
     }
 

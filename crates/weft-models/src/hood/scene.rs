@@ -7,14 +7,16 @@
 //! garment skinned to the frame (weights transferred from the body and diffused over
 //! the garment, as HOOD's loose garments are; LBS) and pushed
 //! 2 mm out of the body (HOOD's push-out). Pinned vertices — the waistband or neckline,
-//! as `weft simulate` attaches them — follow the body's skin triangles (weft-sim's
-//! [`SkinAnchors`]), so HOOD and the simulator hold the same vertices the same way.
+//! the vertices `weft simulate` attaches — follow the skinned garment, as HOOD's do.
+//! (The simulator anchors them to body triangles instead; a t-shirt's neckline, which
+//! floats centimetres off the neck, then sits 2–6 cm from where the skinned garment
+//! around it is, a strain no network step can undo: measured, docs/hood.md.)
 
 use weft_body::joints::smpl_joint_index;
 use weft_body::BodyModel;
 use weft_garment::onbody::push_out;
 use weft_mesh::TriMesh;
-use weft_sim::{Attachment, ClothModel, Material, SimOptions, SkinAnchors};
+use weft_sim::{Attachment, ClothModel, ClothSimulator, Material, PosedBody, SimOptions};
 
 use super::config::HoodConfig;
 use super::features::{BodyStep, GarmentStep, StepGraph};
@@ -124,9 +126,8 @@ pub struct Scene {
     pub body: Vec<Vec<[f64; 3]>>,
     /// Body vertices that take no body edges.
     pub omit: Vec<bool>,
-    /// The garment skinned to every frame.
+    /// The garment skinned to every frame (pinned vertices included: their targets).
     pub skinned: Vec<Vec<[f64; 3]>>,
-    anchors: SkinAnchors,
     /// Seconds per frame.
     pub dt: f64,
 }
@@ -174,13 +175,6 @@ impl Scene {
             .iter()
             .map(|f| f64s(f))
             .collect();
-        let betas: Vec<f64> = clip.betas.iter().map(|&b| f64::from(b)).collect();
-        let rest_body = body.shape(&betas).map_err(body_err("shaping the body"))?;
-        let rest_surface = body
-            .body_surface(&rest_body.positions)
-            .map_err(|e| body_err("the body surface")(e.into()))?;
-        let anchors = SkinAnchors::new(&rest_surface, &garment.positions, &pinned)
-            .map_err(|e| ModelError::Garment(format!("pinning the garment: {e}")))?;
         Ok(Scene {
             garment: hood,
             cloth,
@@ -192,7 +186,6 @@ impl Scene {
                 Vec::new()
             },
             skinned,
-            anchors,
             dt: 1.0 / clip.fps,
         })
     }
@@ -202,15 +195,10 @@ impl Scene {
         self.body.len()
     }
 
-    /// The skinned garment at frame `t` with its pinned vertices at their anchors: the
-    /// pin targets of a step ending at `t`.
+    /// The skinned garment at frame `t`: where the pinned vertices go in a step that
+    /// ends at `t`.
     pub fn pin_targets(&self, t: usize) -> Vec<[f64; 3]> {
-        let mut x = self.skinned[t].clone();
-        let targets = self.anchors.targets(&self.body[t], &self.faces);
-        for (&v, p) in self.anchors.vertices().iter().zip(targets) {
-            x[v as usize] = p;
-        }
-        x
+        self.skinned[t].clone()
     }
 
     /// The start state at frame `t`: the skinned garment at `t − 1` and `t` (or at `t`
@@ -265,6 +253,42 @@ impl Scene {
         };
         let graph = StepGraph::build(&self.garment, &garment, &body, at.dt, config.body_radius)?;
         Ok((graph, Advance::new(&self.garment, &garment)))
+    }
+}
+
+impl Scene {
+    /// The body as the step `at` sees it: at its end-of-step state, having moved there
+    /// from frame `at.t` (the settling step: still at `at.t`).
+    pub fn posed_body(&self, at: StepAt) -> Result<PosedBody, ModelError> {
+        let sim = |e: weft_sim::SimError| ModelError::Body(format!("the posed body: {e}"));
+        let mut body = PosedBody::new(&self.body[at.t], &self.faces).map_err(sim)?;
+        if !at.settle {
+            body.refit(&self.body[at.t + 1]).map_err(sim)?;
+        }
+        Ok(body)
+    }
+
+    /// The step `at` from `state` as weft-sim's implicit Euler takes it (Newton on the
+    /// same incremental potential HOOD is trained on, the pinned vertices at their
+    /// targets): the reference a HOOD step is measured against.
+    pub fn implicit_step(&self, state: StateRef, at: StepAt) -> Result<Vec<[f64; 3]>, ModelError> {
+        let sim = |e: weft_sim::SimError| ModelError::Garment(format!("the implicit step: {e}"));
+        let mut solver = ClothSimulator::from_model(self.cloth.clone()).map_err(sim)?;
+        let v = state
+            .cur
+            .iter()
+            .zip(state.prev)
+            .map(|(c, p)| std::array::from_fn(|k| (c[k] - p[k]) / at.dt))
+            .collect();
+        solver.set_state(state.cur.to_vec(), v).map_err(sim)?;
+        let next = if at.settle { at.t } else { at.t + 1 };
+        let targets = &self.skinned[next];
+        for (i, _) in self.garment.pinned.iter().enumerate().filter(|(_, &p)| p) {
+            solver.move_pin(i as u32, targets[i]).map_err(sim)?;
+        }
+        let body = self.posed_body(at)?;
+        solver.step(at.dt, Some(&body)).map_err(sim)?;
+        Ok(solver.positions().to_vec())
     }
 }
 

@@ -59,6 +59,12 @@ pub struct HoodTraining {
     /// Share of samples whose garment is made of two materials, split by a random plane
     /// (HOOD's training never sees heterogeneous materials; run-time maps need it).
     pub two_materials: f64,
+    /// Weight of the distance to weft-sim's implicit step from the same state (cm²). 0
+    /// is HOOD: the potential alone. The potential is badly conditioned (stretching is
+    /// hundreds of times stiffer than inertia), so its gradient teaches the network the
+    /// implicit step slowly; the step itself, solved by Newton on the same potential, is
+    /// a well-conditioned target (docs/hood.md).
+    pub solver_weight: f64,
     /// Validation scenes (held-out shapes, motions and materials) and their frames.
     pub validation_scenes: usize,
     /// Frames of each validation rollout.
@@ -110,6 +116,7 @@ impl HoodTraining {
             collision_start: 0.01,
             collision_ramp: [0.33, 0.66],
             two_materials: 0.25,
+            solver_weight: 0.0,
             validation_scenes: 4,
             validation_frames: 60,
         }
@@ -208,6 +215,13 @@ impl HoodTraining {
             if !(v.is_finite() && v > 0.0) {
                 return Err(TrainError::config(field, v, "a positive number"));
             }
+        }
+        if !(self.solver_weight.is_finite() && self.solver_weight >= 0.0) {
+            return Err(TrainError::config(
+                "train.solver_weight",
+                self.solver_weight,
+                "a weight >= 0",
+            ));
         }
         if !(self.noise.is_finite() && self.noise >= 0.0) {
             return Err(TrainError::config(

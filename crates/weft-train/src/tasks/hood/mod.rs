@@ -83,11 +83,14 @@ pub enum Term {
     Collision,
     /// Friction against the body.
     Friction,
+    /// The distance to weft-sim's implicit step from the same state (cm², mean over the
+    /// vertices): the potential's minimiser as a target, see [`HoodTraining::solver_weight`].
+    Solver,
 }
 
 impl Term {
-    /// Every term, in the potential's order.
-    pub const ALL: [Term; 6] = [
+    /// The terms of the potential, in its order.
+    pub const POTENTIAL: [Term; 6] = [
         Term::Stretching,
         Term::Bending,
         Term::Gravity,
@@ -106,6 +109,7 @@ impl LossTerm for Term {
             Term::Inertia => "inertia",
             Term::Collision => "collision",
             Term::Friction => "friction",
+            Term::Solver => "solver",
         }
     }
 }
@@ -465,8 +469,12 @@ impl HoodTask {
 
     /// The normalisers from the skinned states of the first samples, as drawn (the
     /// settling steps included, so the time step is a feature the network can read):
-    /// inputs of the step from the skinned garment, outputs the skinned garment's
-    /// acceleration over it (zero for a settling step: the body holds still).
+    /// inputs of the step from the skinned garment; outputs the acceleration of
+    /// weft-sim's implicit step from there, the step the loss's minimum is. HOOD takes
+    /// the skinned garment's own acceleration instead, but a skinned start is far from
+    /// equilibrium: the implicit step moves vertices 1–2 cm (up to 6) where skinning
+    /// accelerates them by 3–4 mm, so outputs scaled by skinning need 5–17 standard
+    /// deviations (docs/hood.md).
     fn fit_stats(&self) -> Result<HoodStats> {
         let mut fit = HoodStatsFit::new(self.config.levels)?;
         for item in 0..STATS_SAMPLES {
@@ -485,7 +493,7 @@ impl HoodTask {
             };
             let (graph, _) = scene.step(start.as_ref(), at, &self.config)?;
             let (prev, cur) = (&start.prev, &start.cur);
-            let next = scene.pin_targets(if s.settle { 1 } else { 2 });
+            let next = scene.implicit_step(start.as_ref(), at)?;
             let mut accel = Vec::with_capacity(3 * cur.len());
             for i in (0..cur.len()).filter(|&i| !scene.garment.pinned[i]) {
                 accel.extend((0..3).map(|k| (next[i][k] - 2.0 * cur[i][k] + prev[i][k]) as f32));
@@ -505,10 +513,7 @@ impl HoodTask {
         at: StepAt,
         collision_weight: f64,
     ) -> Result<Vec<Arc<dyn Energy + Send + Sync>>> {
-        let mut body = PosedBody::new(&scene.body[at.t], &scene.faces)?;
-        if !at.settle {
-            body.refit(&scene.body[at.t + 1])?;
-        }
+        let body = scene.posed_body(at)?;
         let dt = at.dt;
         let target = advance.inertial_target();
         let stiffness = scene.cloth.options().collision_stiffness * collision_weight;
@@ -522,6 +527,18 @@ impl HoodTask {
         })?;
         Ok(PotentialTerm::all(potential))
     }
+}
+
+/// `‖x − target‖²` in cm², the mean over the vertices (pinned ones are exact in both).
+fn solver_loss(x: Tensor<2>, target: &[[f64; 3]], device: &Device) -> Tensor<1> {
+    let n = target.len();
+    let flat: Vec<f32> = target.iter().flatten().map(|&v| v as f32).collect();
+    let t = Tensor::<2>::from_data(burn::tensor::TensorData::new(flat, [n, 3]), device);
+    let d = (x - t).mul_scalar(100.0);
+    (d.clone() * d)
+        .sum()
+        .div_scalar(n.max(1) as f64)
+        .reshape([1])
 }
 
 fn host_positions(x: &Tensor<2>) -> Result<Vec<[f64; 3]>> {
@@ -549,7 +566,11 @@ impl TrainTask for HoodTask {
     }
 
     fn terms(&self, _stage: &Stage) -> Vec<(Term, f64)> {
-        Term::ALL.iter().map(|&t| (t, 1.0)).collect()
+        let mut terms: Vec<(Term, f64)> = Term::POTENTIAL.iter().map(|&t| (t, 1.0)).collect();
+        if self.training.solver_weight > 0.0 {
+            terms.push((Term::Solver, self.training.solver_weight));
+        }
+        terms
     }
 
     fn losses(&mut self, model: &Hood, item: usize, terms: &[Term]) -> Result<Vec<Tensor<1>>> {
@@ -597,15 +618,20 @@ impl TrainTask for HoodTask {
             let potential = self.potential_terms(&scene, &cur, &advance, at, weight)?;
             let x3 = x.clone().reshape([1, n, 3]);
             for (slot, term) in sums.iter_mut().zip(terms) {
-                let index = Term::ALL.iter().position(|a| a == term).unwrap_or(0);
-                let energy = potential.get(index).cloned().ok_or_else(|| {
-                    TrainError::config("train", term.name(), "a term of the potential")
-                })?;
-                let loss = physics_loss(
-                    x3.clone(),
-                    &Arc::new(FrameEnergies::per_frame(vec![energy])?),
-                    PhysicsImpl::Auto,
-                )?;
+                let loss = if *term == Term::Solver {
+                    let target = scene.implicit_step(state, at)?;
+                    solver_loss(x.clone(), &target, &self.device)
+                } else {
+                    let index = Term::POTENTIAL.iter().position(|a| a == term).unwrap_or(0);
+                    let energy = potential.get(index).cloned().ok_or_else(|| {
+                        TrainError::config("train", term.name(), "a term of the potential")
+                    })?;
+                    physics_loss(
+                        x3.clone(),
+                        &Arc::new(FrameEnergies::per_frame(vec![energy])?),
+                        PhysicsImpl::Auto,
+                    )?
+                };
                 *slot = Some(match slot.take() {
                     Some(s) => s + loss,
                     None => loss,
