@@ -248,6 +248,26 @@ pub fn read_run_config(run_dir: &Path) -> Result<(RunHeader, toml::Table), Model
     Ok((header, table))
 }
 
+/// The header and `[model]` table of the run in `run_dir`, which must be a run of
+/// `kind`; errors name its config.toml.
+pub fn model_table(
+    run_dir: &Path,
+    kind: ModelKind,
+) -> Result<(RunHeader, toml::Table), ModelError> {
+    let (header, mut table) = read_run_config(run_dir)?;
+    let path = RunLayout::new(run_dir).config();
+    if header.model != kind {
+        return Err(run_err(
+            &path,
+            format!("a run of model `{}`, not {kind}", header.model),
+        ));
+    }
+    match table.remove("model") {
+        Some(toml::Value::Table(model)) => Ok((header, model)),
+        _ => Err(run_err(&path, "no [model] table")),
+    }
+}
+
 /// A JSON file a run keeps beside its checkpoints (normalisers, fitted statistics),
 /// parsed as `T`; errors name the file and say what it should have held (`what`).
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str) -> Result<T, ModelError> {

@@ -23,7 +23,7 @@ use crate::deformer::{Clip, Deformer, Frames};
 use crate::error::ModelError;
 use crate::kind::ModelKind;
 use crate::refine::predictor::load_record;
-use crate::run::{latest_checkpoint, read_run_config, RunLayout};
+use crate::run::{latest_checkpoint, model_table, RunLayout};
 
 /// The statistics file of a GarFitNet run.
 pub const STATS_FILE: &str = "garfit.json";
@@ -195,21 +195,11 @@ impl GarFitPredictor {
     /// Loads the run in `dir`. Errors name the file: a run of another kind, a `[model]`
     /// that does not validate, a checkpoint that does not fit, missing statistics.
     pub fn load(dir: &Path) -> Result<Self, ModelError> {
-        let (header, mut table) = read_run_config(dir)?;
+        let (_, model) = model_table(dir, ModelKind::GarFitNet)?;
         let path = RunLayout::new(dir).config();
         let run_err = |message: String| ModelError::Run {
             path: path.clone(),
             message,
-        };
-        if header.model != ModelKind::GarFitNet {
-            return Err(run_err(format!(
-                "a {} run, not a garfitnet run",
-                header.model
-            )));
-        }
-        let model = match table.remove("model") {
-            Some(toml::Value::Table(t)) => t,
-            _ => return Err(run_err("no [model] table".into())),
         };
         let config: GarFitConfig = weft_config::overlay(
             &GarFitConfig::new(),

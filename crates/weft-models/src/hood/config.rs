@@ -52,6 +52,11 @@ pub struct HoodConfig {
     /// this (m). HOOD's code: 3 cm.
     #[config(default = 0.03)]
     pub body_radius: f64,
+    /// A rollout's first step holds the body still for this long (s) so the skinned
+    /// garment drapes before the motion starts (HOOD: 1/3 s); 0: no settling step, the
+    /// rollout starts from the skinned garment at rest.
+    #[config(default = "1.0 / 3.0")]
+    pub settle_dt: f64,
     /// Body vertices whose skinning weight on the hands and wrists exceeds 0.5 take no
     /// body edges (HOOD omits the hands "to avoid body self-penetrations").
     #[config(default = true)]
@@ -101,6 +106,12 @@ impl HoodConfig {
             ("hidden_layers", self.hidden_layers),
             ("levels", self.levels),
         ])?;
+        if !(self.settle_dt.is_finite() && self.settle_dt >= 0.0) {
+            return Err(ModelError::Config(format!(
+                "settle_dt = {}: expected seconds >= 0 (0: no settling step)",
+                self.settle_dt
+            )));
+        }
         if !(self.body_radius.is_finite() && self.body_radius > 0.0) {
             return Err(ModelError::Config(format!(
                 "body_radius = {}: expected a positive number of metres",

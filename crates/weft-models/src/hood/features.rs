@@ -297,25 +297,27 @@ mod tests {
             .collect();
         let faces = [[0u32, 1, 2]];
         let omit = [false, false, true];
-        let step = StepGraph::build(
-            &garment,
-            &GarmentStep {
-                prev: &prev,
-                cur: &cur,
-                pin_targets: &targets,
-                buttoned: false,
-            },
-            &BodyStep {
-                prev: &body_cur,
-                cur: &body_cur,
-                next: &body_next,
-                faces: &faces,
-                omit: &omit,
-            },
-            1.0 / 30.0,
-            0.03,
-        )
-        .unwrap();
+        let build = |prev: &[[f64; 3]]| {
+            StepGraph::build(
+                &garment,
+                &GarmentStep {
+                    prev,
+                    cur: &cur,
+                    pin_targets: &targets,
+                    buttoned: false,
+                },
+                &BodyStep {
+                    prev: &body_cur,
+                    cur: &body_cur,
+                    next: &body_next,
+                    faces: &faces,
+                    omit: &omit,
+                },
+                1.0 / 30.0,
+                0.03,
+            )
+        };
+        let step = build(&prev).unwrap();
         let w = StepGraph::node_width(2);
         assert_eq!(step.body_vertices, vec![0]);
         assert_eq!(step.nodes.len(), (n + 1) * w);
@@ -341,24 +343,7 @@ mod tests {
             step.mesh[0].1.len(),
             step.mesh[0].0.len() * StepGraph::MESH_WIDTH
         );
-        let bad = StepGraph::build(
-            &garment,
-            &GarmentStep {
-                prev: &prev[1..],
-                cur: &cur,
-                pin_targets: &targets,
-                buttoned: false,
-            },
-            &BodyStep {
-                prev: &body_cur,
-                cur: &body_cur,
-                next: &body_next,
-                faces: &faces,
-                omit: &omit,
-            },
-            1.0 / 30.0,
-            0.03,
-        );
+        let bad = build(&prev[1..]);
         assert!(bad.unwrap_err().to_string().contains("t - 1"));
     }
 }

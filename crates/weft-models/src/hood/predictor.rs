@@ -19,7 +19,7 @@ use crate::deformer::{Clip, Deformer, Frames};
 use crate::error::ModelError;
 use crate::kind::ModelKind;
 use crate::refine::predictor::load_record;
-use crate::run::{latest_checkpoint, read_run_config, RunLayout};
+use crate::run::{latest_checkpoint, model_table, RunLayout};
 
 /// A trained HOOD run ready to roll out on the CPU.
 pub struct HoodPredictor {
@@ -46,18 +46,11 @@ impl HoodPredictor {
     /// Loads the run in `dir`. Errors name the file: a run of another kind, a `[model]`
     /// that does not validate, a checkpoint that does not fit, missing normalisers.
     pub fn load(dir: &Path) -> Result<Self, ModelError> {
-        let (header, mut table) = read_run_config(dir)?;
+        let (_, model) = model_table(dir, ModelKind::Hood)?;
         let path = RunLayout::new(dir).config();
         let run_err = |message: String| ModelError::Run {
             path: path.clone(),
             message,
-        };
-        if header.model != ModelKind::Hood {
-            return Err(run_err(format!("a {} run, not a hood run", header.model)));
-        }
-        let model = match table.remove("model") {
-            Some(toml::Value::Table(t)) => t,
-            _ => return Err(run_err("no [model] table".into())),
         };
         let config: HoodConfig = weft_config::overlay(
             &HoodConfig::new(),

@@ -88,9 +88,6 @@ pub fn next_positions(
 /// How a rollout runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RolloutOptions {
-    /// The first step holds the body at frame 0 and lasts this long (s), so the skinned
-    /// garment drapes before the motion starts (HOOD: 1/3 s).
-    pub settle_dt: f64,
     /// Button edges are removed from this frame on (`None`: kept throughout).
     pub unbutton_at: Option<usize>,
     /// A step that moves a vertex faster than this (m/s), or to a non-finite position,
@@ -101,7 +98,6 @@ pub struct RolloutOptions {
 impl Default for RolloutOptions {
     fn default() -> Self {
         RolloutOptions {
-            settle_dt: 1.0 / 3.0,
             unbutton_at: None,
             max_speed: 50.0,
         }
@@ -166,7 +162,8 @@ fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Opt
 /// HOOD rolled out over every frame of each scene, the scenes advanced together (one
 /// forward pass per frame for the whole batch).
 ///
-/// Frame 0 is the skinned, pushed-out garment after the settling step; frame `t + 1`
+/// Frame 0 is the skinned, pushed-out garment after the settling step (as it is, when
+/// [`HoodConfig::settle_dt`] is 0); frame `t + 1`
 /// comes from frames `t − 1` and `t` and the body at `t − 1`, `t`, `t + 1`. After the
 /// settling step the garment starts at rest (zero velocity): HOOD's code feeds the
 /// settling displacement, taken over 1/3 s, in as the next step's per-frame velocity,
@@ -180,19 +177,27 @@ pub fn roll_out(
     device: &Device,
 ) -> Result<Vec<Rollout>, ModelError> {
     let buttoned = |t: usize| options.unbutton_at.is_none_or(|f| t < f);
-    let mut states = Vec::with_capacity(scenes.len());
+    let mut starts = Vec::with_capacity(scenes.len());
     for s in scenes {
-        let start = s.start(0, true)?;
+        starts.push(s.start(0, true)?);
+    }
+    let settled = if config.settle_dt > 0.0 {
         let at = StepAt {
             t: 0,
             settle: true,
-            dt: options.settle_dt,
+            dt: config.settle_dt,
             buttoned: buttoned(0),
         };
-        states.push(s.step(start.as_ref(), at, config)?);
-    }
-    let pairs: Vec<_> = states.iter().map(|(g, a)| (g, a)).collect();
-    let settled = step_batch(model, stats, &pairs, device)?;
+        let states = scenes
+            .iter()
+            .zip(&starts)
+            .map(|(s, start)| s.step(start.as_ref(), at, config))
+            .collect::<Result<Vec<_>, _>>()?;
+        let pairs: Vec<_> = states.iter().map(|(g, a)| (g, a)).collect();
+        step_batch(model, stats, &pairs, device)?
+    } else {
+        starts.into_iter().map(|s| s.cur).collect()
+    };
     let mut out: Vec<Rollout> = settled
         .into_iter()
         .map(|x| Rollout {

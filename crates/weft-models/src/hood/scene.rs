@@ -16,7 +16,9 @@ use weft_body::joints::smpl_joint_index;
 use weft_body::BodyModel;
 use weft_garment::onbody::push_out;
 use weft_mesh::TriMesh;
-use weft_sim::{Attachment, ClothModel, ClothSimulator, Material, PosedBody, SimOptions};
+use weft_sim::{
+    check_garment_gap, Attachment, ClothModel, ClothSimulator, Material, PosedBody, SimOptions,
+};
 
 use super::config::HoodConfig;
 use super::features::{BodyStep, GarmentStep, StepGraph};
@@ -170,6 +172,14 @@ impl Scene {
         let frames: Vec<Vec<[f64; 3]>> = (0..posed.len())
             .map(|t| f64s(posed.frame(t).unwrap_or(&[])))
             .collect();
+        // A garment nowhere near the body (another frame or unit) would fall beside it.
+        let rest_body = body
+            .shape(&clip.betas.iter().map(|&b| f64::from(b)).collect::<Vec<_>>())
+            .map_err(body_err("shaping the body"))?;
+        PosedBody::new(&rest_body.positions, &rest_body.faces)
+            .and_then(|b| b.signed_distances(&garment.positions))
+            .and_then(check_garment_gap)
+            .map_err(|e| ModelError::Garment(format!("the garment on the rest body: {e}")))?;
         let skinned: Vec<Vec<[f64; 3]>> = SkinnedGarment::diffused(garment, body, clip.betas)?
             .animate(body, clip, weft_body::Skinning::Lbs)?
             .iter()
@@ -308,4 +318,55 @@ fn hand_vertices(body: &BodyModel) -> Vec<bool> {
                 > 0.5
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use weft_body::BodyModel;
+
+    #[test]
+    fn scenes_refuse_a_garment_off_the_body_and_a_bad_material_map() {
+        let body = BodyModel::load_or_default(None).unwrap();
+        let fit = weft_garment::FitBody::new(&body, &[]).unwrap();
+        let kind = weft_garment::GarmentKind::Skirt;
+        let skirt = fit
+            .generate(kind, &weft_garment::Style::from_seed(kind, 1), 320)
+            .unwrap()
+            .mesh;
+        let poses = vec![[[0.0f32; 3]; 24]; 3];
+        let trans = vec![[0.0f32; 3]; 3];
+        let clip = Clip {
+            betas: &[],
+            poses: &poses,
+            trans: &trans,
+            fps: 30.0,
+        };
+        let cfg = HoodConfig::preset("cpu").unwrap();
+        let hood = Materials::Uniform(Material::hood());
+        let scene = Scene::new(&skirt, &body, &clip, &hood, Attachment::TopOpening, &cfg).unwrap();
+        assert_eq!(scene.frames(), 3);
+        // Pinned vertices (the waistband) follow the skinned garment exactly.
+        let pinned = scene.garment.pinned.iter().position(|&p| p).unwrap();
+        assert_eq!(scene.pin_targets(2)[pinned], scene.skinned[2][pinned]);
+        let mut far = skirt.clone();
+        for p in &mut far.positions {
+            p[0] += 3.0;
+        }
+        let e = Scene::new(&far, &body, &clip, &hood, Attachment::TopOpening, &cfg)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("rest body"), "{e}");
+        let short = Materials::PerVertex(vec![Material::silk(); 5]);
+        let e = Scene::new(&skirt, &body, &clip, &short, Attachment::TopOpening, &cfg)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("material map"), "{e}");
+        let nan = vec![[[f32::NAN; 3]; 24]; 3];
+        let bad = Clip {
+            poses: &nan,
+            ..clip
+        };
+        assert!(Scene::new(&skirt, &body, &bad, &hood, Attachment::TopOpening, &cfg).is_err());
+    }
 }

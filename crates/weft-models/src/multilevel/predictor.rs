@@ -49,18 +49,8 @@ fn run_err(path: &Path, message: impl Into<String>) -> ModelError {
 /// Reads `RUN/config.toml` ([`crate::run::read_run_config`]: header and format version)
 /// and returns its `[model]` table as a Multilevel config.
 pub fn read_run_config(run_dir: &Path) -> Result<MultilevelConfig, ModelError> {
-    let (header, mut table) = crate::run::read_run_config(run_dir)?;
+    let (header, model) = crate::run::model_table(run_dir, ModelKind::Multilevel)?;
     let path = crate::run::RunLayout::new(run_dir).config();
-    if header.model != ModelKind::Multilevel {
-        return Err(run_err(
-            &path,
-            format!("a run of model `{}`, not multilevel", header.model),
-        ));
-    }
-    let model = match table.remove("model") {
-        Some(toml::Value::Table(t)) => t,
-        _ => return Err(run_err(&path, "no [model] table")),
-    };
     let cfg =
         MultilevelConfig::from_table(&model, &path.display().to_string()).map_err(|e| match e {
             ModelError::Config(m) => run_err(&path, format!("[model]: {m}")),

@@ -44,11 +44,9 @@ pub struct HoodTraining {
     /// Steps between rollout-length increases (HOOD: 5 000); the rollout starts at 1.
     pub rollout_every: usize,
     /// Probability that a sample starts with the settling step (body still, time step
-    /// [`HoodTraining::settle_dt`]) while the rollout is one step long; afterwards every
-    /// sample does (HOOD).
+    /// `[model] settle_dt`) while the rollout is one step long; afterwards every sample
+    /// does (HOOD). None does when `settle_dt` is 0.
     pub settle_probability: f64,
-    /// The settling step's length (s; HOOD: 1/3).
-    pub settle_dt: f64,
     /// Gaussian noise on the start positions (m; HOOD: 3 mm).
     pub noise: f64,
     /// The collision term's weight ramps from this (a factor of HOOD's stiffness
@@ -111,7 +109,6 @@ impl HoodTraining {
             max_rollout: 5,
             rollout_every: 5000,
             settle_probability: 0.5,
-            settle_dt: 1.0 / 3.0,
             noise: 0.003,
             collision_start: 0.01,
             collision_ramp: [0.33, 0.66],
@@ -208,10 +205,7 @@ impl HoodTraining {
                 return Err(TrainError::config(field, v, "between 0 and 1"));
             }
         }
-        for (field, v) in [
-            ("train.settle_dt", self.settle_dt),
-            ("train.collision_start", self.collision_start),
-        ] {
+        for (field, v) in [("train.collision_start", self.collision_start)] {
             if !(v.is_finite() && v > 0.0) {
                 return Err(TrainError::config(field, v, "a positive number"));
             }

@@ -199,6 +199,23 @@ fn two_materials(mesh: &TriMesh, a: Material, b: Material, rng: &mut SplitMix64)
     )
 }
 
+/// The softest (`0`) or stiffest and heaviest (`1`) corner of HOOD's training range.
+fn range_corner(end: usize) -> Material {
+    use weft_sim::hood_material::{
+        HOOD_BENDING_RANGE, HOOD_DENSITY_RANGE, HOOD_LAMBDA_RANGE, HOOD_MU_RANGE,
+    };
+    let hood = Material::hood();
+    Material::from_lame(
+        "custom",
+        HOOD_DENSITY_RANGE[end],
+        HOOD_MU_RANGE[end],
+        HOOD_LAMBDA_RANGE[end],
+        hood.thickness,
+        HOOD_BENDING_RANGE[end],
+        hood.friction,
+    )
+}
+
 /// A standard normal draw (Box–Muller).
 fn normal(rng: &mut SplitMix64) -> f64 {
     let u = rng.unit().max(1e-300);
@@ -380,7 +397,8 @@ impl HoodTask {
         } else {
             Materials::Uniform(a)
         };
-        let settle = rollout > 1 || rng.unit() < self.training.settle_probability;
+        let settle = self.config.settle_dt > 0.0
+            && (rollout > 1 || rng.unit() < self.training.settle_probability);
         Sample {
             garment,
             motion,
@@ -420,7 +438,8 @@ impl HoodTask {
     }
 
     /// Held-out scenes: new shapes (drawn after the training ones), every motion in turn
-    /// from its start, HOOD's default material and a silk–denim garment in turn.
+    /// from its start, HOOD's default material and a garment split between the two
+    /// corners of HOOD's material range in turn.
     fn validation_scenes(&self, rng: &mut SplitMix64) -> Result<Vec<Scene>> {
         let shapes = shapes(&self.training, self.training.validation_scenes, rng);
         let mut out = Vec::new();
@@ -453,7 +472,7 @@ impl HoodTask {
                 Materials::Uniform(Material::hood())
             } else {
                 let mut split = SplitMix64::new(k as u64);
-                two_materials(&mesh, Material::silk(), Material::denim(), &mut split)
+                two_materials(&mesh, range_corner(0), range_corner(1), &mut split)
             };
             out.push(Scene::new(
                 &mesh,
@@ -485,7 +504,7 @@ impl HoodTask {
                 t: 1,
                 settle: s.settle,
                 dt: if s.settle {
-                    self.training.settle_dt
+                    self.config.settle_dt
                 } else {
                     scene.dt
                 },
@@ -597,7 +616,7 @@ impl TrainTask for HoodTask {
         for k in 0..rollout {
             let settle = s.settle && k == 0;
             let dt = if settle {
-                self.training.settle_dt
+                self.config.settle_dt
             } else {
                 scene.dt
             };
@@ -655,10 +674,7 @@ impl TrainTask for HoodTask {
 
     fn validate(&mut self, model: &Hood) -> Result<Metrics> {
         let scenes: Vec<&Scene> = self.validation.iter().collect();
-        let options = RolloutOptions {
-            settle_dt: self.training.settle_dt,
-            ..RolloutOptions::default()
-        };
+        let options = RolloutOptions::default();
         let rollouts = roll_out(
             model,
             &self.stats,
