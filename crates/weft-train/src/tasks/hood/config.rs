@@ -19,7 +19,8 @@ use crate::run_config::{ModelSettings, RunConfig, TaskSettings};
 pub struct HoodTraining {
     /// The body model (an SMPL-format `.npz`); none: weft's built-in body.
     pub body: Option<PathBuf>,
-    /// Garment kinds drawn (weft-garment's names: skirt, dress, tshirt, …).
+    /// Garment kinds drawn (weft-garment's names: skirt, dress, tshirt, tank,
+    /// longsleeve, shorts, pants, jumpsuit).
     pub garments: Vec<String>,
     /// Garment styles per kind (each a seed of weft-garment's style draw).
     pub styles: usize,
@@ -33,7 +34,7 @@ pub struct HoodTraining {
     /// How many β components are drawn (the rest are 0).
     pub shape_components: usize,
     /// Procedural motions drawn (weft-motion's names: walk, run, jump, dance, kick,
-    /// raise_arms, twist, bow).
+    /// raise-arms, twist, bow).
     pub motions: Vec<String>,
     /// Motion files (AMASS `.npz`, BVH) drawn beside the procedural ones.
     pub motion_files: Vec<PathBuf>,
@@ -43,9 +44,10 @@ pub struct HoodTraining {
     pub max_rollout: usize,
     /// Steps between rollout-length increases (HOOD: 5 000); the rollout starts at 1.
     pub rollout_every: usize,
-    /// Probability that a sample starts with the settling step (body still, time step
-    /// `[model] settle_dt`) while the rollout is one step long; afterwards every sample
-    /// does (HOOD). None does when `settle_dt` is 0.
+    /// Probability that a sample starts from the skinned garment at rest, as a rollout
+    /// does, while the rollout is one step long; afterwards every sample does (HOOD).
+    /// With `[model] settle_dt` > 0 such a start takes the settling step first (body
+    /// still, that time step); otherwise the skinned garment moves with the body.
     pub settle_probability: f64,
     /// Gaussian noise on the start positions (m; HOOD: 3 mm).
     pub noise: f64,
@@ -78,8 +80,8 @@ impl HoodTraining {
             body: None,
             garments: [
                 "tshirt",
-                "tank_top",
-                "long_sleeve",
+                "tank",
+                "longsleeve",
                 "shorts",
                 "pants",
                 "dress",
@@ -98,7 +100,7 @@ impl HoodTraining {
                 "jump",
                 "dance",
                 "kick",
-                "raise_arms",
+                "raise-arms",
                 "twist",
                 "bow",
             ]
@@ -364,5 +366,14 @@ mod tests {
             assert!(e.contains(field), "{e}");
         }
         assert!(cpu.to_toml().unwrap().contains("rollout_every"));
+        // Every name in both presets is one the garment and motion libraries know.
+        for preset in [HoodTraining::cpu(), HoodTraining::paper()] {
+            for g in &preset.garments {
+                assert!(weft_garment::GarmentKind::parse(g).is_ok(), "garment {g}");
+            }
+            for m in &preset.motions {
+                assert!(weft_motion::MotionKind::parse(m).is_some(), "motion {m}");
+            }
+        }
     }
 }

@@ -155,8 +155,17 @@ struct Sample {
     /// First frame of the window (the frame before the rollout starts).
     first: usize,
     materials: Materials,
-    settle: bool,
+    /// The rollout starts from the skinned garment at rest, as inference does (with the
+    /// settling step first when `[model] settle_dt` > 0).
+    at_rest: bool,
     noise_seed: u64,
+}
+
+impl Sample {
+    /// Whether the rollout's step `k` is the settling step.
+    fn settles(&self, k: usize, config: &HoodConfig) -> bool {
+        k == 0 && self.at_rest && config.settle_dt > 0.0
+    }
 }
 
 /// HOOD's training task; see the module documentation.
@@ -262,7 +271,7 @@ fn motion_pool(training: &HoodTraining, body: &BodyModel, seed: u64) -> Result<V
             TrainError::config(
                 "train.motions",
                 name,
-                "a procedural motion name (walk, run, jump, dance, kick, raise_arms, twist, bow)",
+                "a procedural motion name (walk, run, jump, dance, kick, raise-arms, twist, bow)",
             )
         })?;
         let mut p = ProceduralParams::new(kind);
@@ -397,14 +406,13 @@ impl HoodTask {
         } else {
             Materials::Uniform(a)
         };
-        let settle = self.config.settle_dt > 0.0
-            && (rollout > 1 || rng.unit() < self.training.settle_probability);
+        let at_rest = rollout > 1 || rng.unit() < self.training.settle_probability;
         Sample {
             garment,
             motion,
             first,
             materials,
-            settle,
+            at_rest,
             noise_seed: rng.next_u64(),
         }
     }
@@ -499,11 +507,12 @@ impl HoodTask {
         for item in 0..STATS_SAMPLES {
             let s = self.sample(item, 1);
             let scene = self.scene(s.garment, s.motion, s.first, 3, &s.materials)?;
-            let start = scene.start(1, s.settle)?;
+            let start = scene.start(1, s.at_rest)?;
+            let settle = s.settles(0, &self.config);
             let at = StepAt {
                 t: 1,
-                settle: s.settle,
-                dt: if s.settle {
+                settle,
+                dt: if settle {
                     self.config.settle_dt
                 } else {
                     scene.dt
@@ -596,7 +605,7 @@ impl TrainTask for HoodTask {
         let rollout = self.stage.rollout;
         let s = self.sample(item, rollout);
         let scene = self.scene(s.garment, s.motion, s.first, rollout + 2, &s.materials)?;
-        let start = scene.start(1, s.settle)?;
+        let start = scene.start(1, s.at_rest)?;
         let (mut prev, mut cur) = (start.prev, start.cur);
         // Position noise on the free vertices, the same offset at t − 1 and t.
         let mut rng = SplitMix64::new(s.noise_seed);
@@ -614,7 +623,7 @@ impl TrainTask for HoodTask {
         let mut sums: Vec<Option<Tensor<1>>> = vec![None; terms.len()];
         let mut t = 1;
         for k in 0..rollout {
-            let settle = s.settle && k == 0;
+            let settle = s.settles(k, &self.config);
             let dt = if settle {
                 self.config.settle_dt
             } else {

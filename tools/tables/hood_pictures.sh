@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# A HOOD rollout beside weft simulate's for the same input: an unseen skirt on the
+# default body walking, frames 0, 10, 20, 30 and 39, each over its posed body (top row
+# simulated, bottom row HOOD), with each row's mean edge strain over all frames printed.
+#
+#   tools/tables/hood_pictures.sh RUN OUT.png [GARMENT.obj]
+#
+# Environment: WEFT (default `weft`), KIND (skirt), VERTICES (1000), MOTION (walk),
+# SEED (3), MATERIAL (hood). Needs python3 with Pillow.
+set -euo pipefail
+
+run=$1 out=$2 garment=${3:-}
+weft=${WEFT:-weft}
+kind=${KIND:-skirt} vertices=${VERTICES:-1000} motion=${MOTION:-walk} seed=${SEED:-3}
+material=${MATERIAL:-hood}
+frames=(0 10 20 30 39)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+if [[ -z "$garment" ]]; then
+    garment="$tmp/garment.obj"
+    "$weft" garment generate --kind "$kind" --vertices "$vertices" --seed 101 --out "$garment" >/dev/null
+fi
+"$weft" motion generate --kind "$motion" --seed "$seed" --frames 40 --out "$tmp/motion.npz" >/dev/null
+"$weft" simulate --garment "$garment" --motion "$tmp/motion.npz" --material "$material" \
+    --obj --out "$tmp/sim" >/dev/null
+"$weft" animate "$run" --garment "$garment" --motion "$tmp/motion.npz" --material "$material" \
+    --format obj --out "$tmp/hood" >/dev/null || echo "HOOD's rollout stopped early (see above)" >&2
+row() {
+    local dir=$1 title=$2
+    local files=($(ls "$dir"/*.obj | sort))
+    for t in "${frames[@]}"; do
+        [[ $t -lt ${#files[@]} ]] || continue
+        "$weft" body pose --motion "$tmp/motion.npz" --frame "$t" --out "$tmp/body$t.obj" >/dev/null
+        "$weft" render "${files[$t]}" --body "$tmp/body$t.obj" --camera front --size 420 \
+            --title "$title, frame $t" --out "$tmp/$title-$t.png" >/dev/null
+        echo "$tmp/$title-$t.png"
+    done
+}
+top=$(row "$tmp/sim/obj" simulated)
+bottom=$(row "$tmp/hood" HOOD)
+python3 - "$out" "$garment" "$tmp/sim/obj" "$tmp/hood" <<PY
+import math, os, sys
+from PIL import Image
+out, garment, sim, hood = sys.argv[1:5]
+def load(p):
+    v, f = [], []
+    for l in open(p):
+        t = l.split()
+        if t and t[0] == "v": v.append(tuple(map(float, t[1:4])))
+        elif t and t[0] == "f": f.append(tuple(int(x.split("/")[0]) - 1 for x in t[1:4]))
+    return v, f
+rest, faces = load(garment)
+edges = {tuple(sorted(e)) for f in faces for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
+for name, d in (("simulated", sim), ("HOOD", hood)):
+    s = []
+    for p in sorted(os.listdir(d)):
+        v, _ = load(os.path.join(d, p))
+        s += [abs(math.dist(v[a], v[b]) / math.dist(rest[a], rest[b]) - 1) for a, b in edges]
+    print(f"{name}: {len(os.listdir(d))} frames, mean edge strain {100 * sum(s) / max(len(s), 1):.2f} %")
+rows = [[Image.open(p) for p in """$top""".split()], [Image.open(p) for p in """$bottom""".split()]]
+w = max(sum(i.width for i in r) for r in rows if r)
+h = sum(max((i.height for i in r), default=0) for r in rows)
+sheet = Image.new("RGB", (w, h), "white")
+y = 0
+for r in rows:
+    x = 0
+    for i in r:
+        sheet.paste(i, (x, y))
+        x += i.width
+    y += max((i.height for i in r), default=0)
+sheet.save(out)
+print("wrote", out)
+PY
