@@ -538,7 +538,8 @@ def runs():
         "config_version_99/config.toml": 'format_version = 99\nmodel_kind = "multilevel"\npreset = "cpu"\n',
         "config_unknown_model/config.toml": 'format_version = 1\nmodel_kind = "transformer"\npreset = "cpu"\n',
         "config_no_preset/config.toml": 'format_version = 1\nmodel_kind = "multilevel"\n',
-        "config_not_implemented/config.toml": RUN_CONFIG_HEAD.replace("multilevel", "hood"),
+        "config_hood_unknown_key/config.toml": RUN_CONFIG_HEAD.replace("multilevel", "hood")
+        + "latnet = 32\n",
         "config_unknown_model_key/config.toml": RUN_CONFIG_HEAD + "feature_widht = 32\n",
         "config_no_model_table/config.toml": 'format_version = 1\nmodel_kind = "multilevel"\npreset = "cpu"\n',
         "config_binary/config.toml": b"\x00\x01\xff\n",

@@ -210,6 +210,33 @@ fn hood_trains_resumes_and_animates() {
         assert!(stderr(&o).contains(needle), "{extra:?}: {}", stderr(&o));
         assert!(!out.exists(), "{extra:?} wrote a file");
     }
+    // A run whose [model] holds an unknown key: named, as every run's config is read.
+    let badkey = dir.join("badkey");
+    copy_dir(&run, &badkey);
+    let text = std::fs::read_to_string(badkey.join("config.toml")).unwrap();
+    std::fs::write(
+        badkey.join("config.toml"),
+        text.replace("[model]\n", "[model]\nlatnet = 32\n"),
+    )
+    .unwrap();
+    let k = dir.join("k.pc2");
+    let o = weft(&[
+        "animate",
+        s(&badkey),
+        "--garment",
+        s(&skirt),
+        "--motion",
+        "walk",
+        "--frames",
+        "3",
+        "--format",
+        "pc2",
+        "--out",
+        s(&k),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("model.latnet"), "{}", stderr(&o));
+    assert!(!k.exists());
     let o = weft(&[
         "train",
         "--model",

@@ -352,7 +352,12 @@ const RUNS: &[(&str, &str)] = &[
     ("config_version_99", "format_version 99"),
     ("config_unknown_model", "unknown model `transformer`"),
     ("config_no_preset", "no preset"),
-    ("config_not_implemented", "`hood`"),
+    // `attribute` reads Multilevel runs only and says so; `animate` names the key
+    // (hood_cli.rs checks that): both name the file.
+    (
+        "config_hood_unknown_key",
+        "config_hood_unknown_key/config.toml",
+    ),
     ("config_unknown_model_key", "`model.feature_widht`"),
     ("config_no_model_table", "no [model] table"),
     ("config_binary", "UTF-8"),
