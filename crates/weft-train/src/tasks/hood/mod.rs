@@ -4,16 +4,18 @@
 //!
 //! - Before the first step: a pool of garments (each kind × style built on each of
 //!   `shapes` bodies of random β, in that body's rest pose, weft-garment) and of motions
-//!   (procedural kinds, motion files). The normalisers are fitted on the skinned states of
-//!   the first samples (HOOD's warm-up gathers them the same way) and saved as
-//!   `hood.json`.
+//!   (procedural kinds, motion files). The normalisers are fitted on the start states of
+//!   the first samples (HOOD's warm-up gathers them the same way), the output's on
+//!   weft-sim's implicit step from there, and saved as `hood.json`.
 //! - An item is a sample drawn from its index and the run's seed: a garment of the pool,
 //!   a motion and a start frame, a material (HOOD's ranges; a share of samples gets two
 //!   materials split by a plane), 3 mm of noise on the start positions, and with some
-//!   probability a settling step first (body still, 1/3 s). The rollout of the current
-//!   length runs from the skinned garment; every step's state is the previous prediction,
-//!   detached (no backpropagation through time), and the item's loss is the mean over
-//!   its steps of each term of the potential. HOOD steps the optimiser after every
+//!   probability a start at rest (with the settling step first, body still, when
+//!   `[model] settle_dt` > 0). The rollout of the current length runs from the skinned
+//!   garment; every step's state is the previous prediction, detached (no
+//!   backpropagation through time), and the item's loss is the mean over its steps of
+//!   each term of the potential, and of the distance to the implicit step when
+//!   `solver_weight` > 0. HOOD steps the optimiser after every
 //!   rollout step; here the steps of one item share one optimiser step, so an item is a
 //!   pure function of its index and the model, and a resumed run repeats it exactly.
 //! - Stages: the rollout length (1 → `max_rollout`, one more every `rollout_every`
@@ -241,26 +243,41 @@ fn garment_pool(
 ) -> Result<Vec<PoolGarment>> {
     let mut out = Vec::new();
     for betas in shapes {
-        let b64: Vec<f64> = betas.iter().map(|&b| f64::from(b)).collect();
-        let fit = FitBody::new(body, &b64).map_err(|e| {
-            TrainError::config("train.shape_range", training.shape_range, &e.to_string())
-        })?;
         for name in &training.garments {
-            let kind = GarmentKind::parse(name)
-                .map_err(|e| TrainError::config("train.garments", name, &e.to_string()))?;
             for s in 0..training.styles {
-                let style = Style::from_seed(kind, seed.wrapping_add(s as u64));
-                let g = fit
-                    .generate(kind, &style, training.garment_vertices)
-                    .map_err(|e| TrainError::config("train.garments", name, &e.to_string()))?;
                 out.push(PoolGarment {
-                    mesh: g.mesh,
+                    mesh: garment_on(training, body, betas, name, seed.wrapping_add(s as u64))?,
                     betas: betas.clone(),
                 });
             }
         }
     }
     Ok(out)
+}
+
+/// The garment `kind` of style `style_seed` built on the body of shape `betas` in its rest
+/// pose, with the training's vertex count; errors name the config field.
+fn garment_on(
+    training: &HoodTraining,
+    body: &BodyModel,
+    betas: &[f32],
+    kind: &str,
+    style_seed: u64,
+) -> Result<TriMesh> {
+    let b64: Vec<f64> = betas.iter().map(|&b| f64::from(b)).collect();
+    let fit = FitBody::new(body, &b64).map_err(|e| {
+        TrainError::config("train.shape_range", training.shape_range, &e.to_string())
+    })?;
+    let parsed = GarmentKind::parse(kind)
+        .map_err(|e| TrainError::config("train.garments", kind, &e.to_string()))?;
+    Ok(fit
+        .generate(
+            parsed,
+            &Style::from_seed(parsed, style_seed),
+            training.garment_vertices,
+        )
+        .map_err(|e| TrainError::config("train.garments", kind, &e.to_string()))?
+        .mesh)
 }
 
 /// The motion pool: each procedural kind (seeded) and each motion file.
@@ -453,21 +470,8 @@ impl HoodTask {
         let mut out = Vec::new();
         for (k, betas) in shapes.iter().enumerate() {
             let kind = &self.training.garments[k % self.training.garments.len()];
-            let b64: Vec<f64> = betas.iter().map(|&b| f64::from(b)).collect();
-            let fit = FitBody::new(&self.body, &b64).map_err(|e| {
-                TrainError::config(
-                    "train.shape_range",
-                    self.training.shape_range,
-                    &e.to_string(),
-                )
-            })?;
-            let parsed = GarmentKind::parse(kind)
-                .map_err(|e| TrainError::config("train.garments", kind, &e.to_string()))?;
-            let style = Style::from_seed(parsed, self.seed.wrapping_add(1000 + k as u64));
-            let mesh = fit
-                .generate(parsed, &style, self.training.garment_vertices)
-                .map_err(|e| TrainError::config("train.garments", kind, &e.to_string()))?
-                .mesh;
+            let style = self.seed.wrapping_add(1000 + k as u64);
+            let mesh = garment_on(&self.training, &self.body, betas, kind, style)?;
             let m = &self.motions[k % self.motions.len()];
             let end = self.training.validation_frames.min(m.poses.len());
             let clip = Clip {
