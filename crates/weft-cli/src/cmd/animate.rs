@@ -130,11 +130,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
                 trans: motion.trans(),
                 fps: motion.fps(),
             };
-            let scene = hood.scene(&garment, &body, &clip)?;
-            let rollout = hood
-                .roll_out(&[&scene])?
-                .pop()
-                .context("HOOD gave no rollout")?;
+            let rollout = hood.roll_out_clip(&garment, &body, &clip)?;
             let frames: Vec<Vec<[f32; 3]>> = rollout
                 .frames
                 .iter()

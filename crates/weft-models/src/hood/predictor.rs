@@ -107,6 +107,20 @@ impl HoodPredictor {
         Ok(scene)
     }
 
+    /// `garment` on `body` through `clip` (the [`HoodPredictor::scene`]) rolled out: every
+    /// frame reached, and where it stopped if it diverged.
+    pub fn roll_out_clip(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+    ) -> Result<Rollout, ModelError> {
+        let scene = self.scene(garment, body, clip)?;
+        self.roll_out(&[&scene])?
+            .pop()
+            .ok_or_else(|| ModelError::Config("HOOD returned no rollout".into()))
+    }
+
     /// Rolls out several scenes together (one forward pass per frame for all of them).
     pub fn roll_out(&self, scenes: &[&Scene]) -> Result<Vec<Rollout>, ModelError> {
         roll_out(
@@ -145,11 +159,7 @@ impl Deformer for HoodPredictor {
         body: &BodyModel,
         clip: &Clip,
     ) -> Result<Frames, ModelError> {
-        let scene = self.scene(garment, body, clip)?;
-        let rollout = self
-            .roll_out(&[&scene])?
-            .pop()
-            .ok_or_else(|| ModelError::Config("HOOD returned no rollout".into()))?;
+        let rollout = self.roll_out_clip(garment, body, clip)?;
         if let Some((frame, why)) = rollout.stopped {
             return Err(ModelError::Diverged {
                 frame,
