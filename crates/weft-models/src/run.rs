@@ -268,6 +268,22 @@ pub fn model_table(
     }
 }
 
+/// The `[model]` of the run of `kind` in `run_dir`, laid over `defaults` (keys added
+/// since the run was made read as their defaults; unknown keys are refused by name), and
+/// checked by `check`; errors name the run's config.toml.
+pub fn model_config<C: serde::Serialize + serde::de::DeserializeOwned>(
+    run_dir: &Path,
+    kind: ModelKind,
+    defaults: &C,
+    check: impl FnOnce(&C) -> Result<(), ModelError>,
+) -> Result<C, ModelError> {
+    let (_, model) = model_table(run_dir, kind)?;
+    let path = RunLayout::new(run_dir).config();
+    let config: C = weft_config::overlay(defaults, &model, &path.display().to_string(), "model")?;
+    check(&config).map_err(|e| run_err(&path, format!("[model]: {e}")))?;
+    Ok(config)
+}
+
 /// A JSON file a run keeps beside its checkpoints (normalisers, fitted statistics),
 /// parsed as `T`; errors name the file and say what it should have held (`what`).
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path, what: &str) -> Result<T, ModelError> {

@@ -23,7 +23,7 @@ use crate::deformer::{Clip, Deformer, Frames};
 use crate::error::ModelError;
 use crate::kind::ModelKind;
 use crate::refine::predictor::load_record;
-use crate::run::{latest_checkpoint, model_table, RunLayout};
+use crate::run::{latest_checkpoint, model_config, RunLayout};
 
 /// The statistics file of a GarFitNet run.
 pub const STATS_FILE: &str = "garfit.json";
@@ -195,21 +195,17 @@ impl GarFitPredictor {
     /// Loads the run in `dir`. Errors name the file: a run of another kind, a `[model]`
     /// that does not validate, a checkpoint that does not fit, missing statistics.
     pub fn load(dir: &Path) -> Result<Self, ModelError> {
-        let (_, model) = model_table(dir, ModelKind::GarFitNet)?;
+        let config = model_config(
+            dir,
+            ModelKind::GarFitNet,
+            &GarFitConfig::new(),
+            GarFitConfig::validate,
+        )?;
         let path = RunLayout::new(dir).config();
         let run_err = |message: String| ModelError::Run {
             path: path.clone(),
             message,
         };
-        let config: GarFitConfig = weft_config::overlay(
-            &GarFitConfig::new(),
-            &model,
-            &path.display().to_string(),
-            "model",
-        )?;
-        config
-            .validate()
-            .map_err(|e| run_err(format!("[model]: {e}")))?;
         let device = weft_nn::backend::cpu();
         let checkpoint = latest_checkpoint(dir)?;
         let model = load_record(config.init(&device)?, &checkpoint)?;

@@ -19,7 +19,7 @@ use crate::deformer::{Clip, Deformer, Frames};
 use crate::error::ModelError;
 use crate::kind::ModelKind;
 use crate::refine::predictor::load_record;
-use crate::run::{latest_checkpoint, model_table, RunLayout};
+use crate::run::{latest_checkpoint, model_config, RunLayout};
 
 /// A trained HOOD run ready to roll out on the CPU.
 pub struct HoodPredictor {
@@ -46,21 +46,17 @@ impl HoodPredictor {
     /// Loads the run in `dir`. Errors name the file: a run of another kind, a `[model]`
     /// that does not validate, a checkpoint that does not fit, missing normalisers.
     pub fn load(dir: &Path) -> Result<Self, ModelError> {
-        let (_, model) = model_table(dir, ModelKind::Hood)?;
+        let config = model_config(
+            dir,
+            ModelKind::Hood,
+            &HoodConfig::new(),
+            HoodConfig::validate,
+        )?;
         let path = RunLayout::new(dir).config();
         let run_err = |message: String| ModelError::Run {
             path: path.clone(),
             message,
         };
-        let config: HoodConfig = weft_config::overlay(
-            &HoodConfig::new(),
-            &model,
-            &path.display().to_string(),
-            "model",
-        )?;
-        config
-            .validate()
-            .map_err(|e| run_err(format!("[model]: {e}")))?;
         let device = weft_nn::backend::cpu();
         let checkpoint = latest_checkpoint(dir)?;
         let model = load_record(config.init(&device)?, &checkpoint)?;
