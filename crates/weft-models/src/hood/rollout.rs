@@ -125,17 +125,23 @@ pub fn step_batch(
     let advances: Vec<_> = steps.iter().map(|s| s.1).collect();
     let out = model.forward(HoodInput::new(&graphs, stats, device)?)?;
     let x = next_positions(out, &advances, stats, device)?;
-    let flat: Vec<f32> = x
-        .into_data()
-        .convert::<f32>()
-        .try_into_vec::<f32>()
-        .map_err(|e| ModelError::Config(format!("HOOD output: {e:?}")))?;
-    let mut rows = flat
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]].map(f64::from));
+    let mut rows = host_positions(&x)?.into_iter();
     Ok(advances
         .iter()
         .map(|a| rows.by_ref().take(a.free.len()).collect())
+        .collect())
+}
+
+/// The rows of a `[N, 3]` positions tensor on the host, in f64.
+pub fn host_positions(x: &Tensor<2>) -> Result<Vec<[f64; 3]>, ModelError> {
+    let flat: Vec<f32> = x
+        .to_data()
+        .convert::<f32>()
+        .try_into_vec::<f32>()
+        .map_err(|e| ModelError::Config(format!("HOOD output: {e:?}")))?;
+    Ok(flat
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]].map(f64::from))
         .collect())
 }
 

@@ -37,7 +37,7 @@ use weft_body::{BodyModel, Pose};
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_mesh::rng::SplitMix64;
 use weft_mesh::TriMesh;
-use weft_models::hood::rollout::next_positions;
+use weft_models::hood::rollout::{host_positions, next_positions};
 use weft_models::hood::{
     roll_out, Advance, Hood, HoodConfig, HoodInput, HoodStats, HoodStatsFit, Materials,
     RolloutOptions, Scene, StateRef, StepAt, STATS_FILE,
@@ -571,21 +571,6 @@ fn solver_loss(x: Tensor<2>, target: &[[f64; 3]], device: &Device) -> Tensor<1> 
         .sum()
         .div_scalar(n.max(1) as f64)
         .reshape([1])
-}
-
-fn host_positions(x: &Tensor<2>) -> Result<Vec<[f64; 3]>> {
-    let flat: Vec<f32> = x
-        .to_data()
-        .convert::<f32>()
-        .try_into_vec::<f32>()
-        .map_err(|source| TrainError::Tensor {
-            what: "HOOD's predicted positions",
-            source,
-        })?;
-    Ok(flat
-        .chunks_exact(3)
-        .map(|c| [c[0], c[1], c[2]].map(f64::from))
-        .collect())
 }
 
 impl TrainTask for HoodTask {
