@@ -181,10 +181,10 @@ impl MultilevelBench {
 
         progress("frame inputs");
         let inputs = try_median_ms(reps, || {
-            FrameInputs::new(body, &clip, range.clone(), &cfg).map(drop)
+            FrameInputs::new(body, &g, &clip, range.clone(), &cfg).map(drop)
         })
         .map_err(model_error)?;
-        let f = FrameInputs::new(body, &clip, range.clone(), &cfg).map_err(model_error)?;
+        let f = FrameInputs::new(body, &g, &clip, range.clone(), &cfg).map_err(model_error)?;
         progress("E^t1 and skinning weights");
         let t1 = try_median_ms(reps, || {
             wait_for(model.skinning_weights(&pair, &g, &f).map_err(model_error)?)
@@ -194,6 +194,7 @@ impl MultilevelBench {
             wait_for(model.motion_features(&g, &f).map_err(model_error)?)
         })?;
         let motion_features = model.motion_features(&g, &f).map_err(model_error)?;
+        let contact = model.contact_features(&g, &f).map_err(model_error)?;
         let batch = g.frame_batch(t).map_err(model_error)?;
         let (mut embed, mut mp) = (0.0, 0.0);
         for (k, sub) in model.mp.iter().enumerate() {
@@ -203,8 +204,13 @@ impl MultilevelBench {
                 "M^mp (next submodule)"
             });
             let run_embed = || {
-                sub.embed(pair.fused.clone(), motion_features.clone(), batch.batch(0))
-                    .map_err(model_error)
+                sub.embed(
+                    pair.fused.clone(),
+                    motion_features.clone(),
+                    contact.clone(),
+                    batch.batch(0),
+                )
+                .map_err(model_error)
             };
             embed += try_median_ms(reps, || wait_for(run_embed()?))?;
             mp += try_median_ms(reps, || {

@@ -75,7 +75,7 @@ pub fn explain_vertex(
     let cfg = model.config();
     let device = model.device();
     let g = GarmentInput::new(garment, body, clip.betas, cfg)?;
-    let f = FrameInputs::new(body, clip, frame..frame + 1, cfg)?;
+    let f = FrameInputs::new(body, &g, clip, frame..frame + 1, cfg)?;
     let width = cfg.node_features();
     let x = tensor2(&g.node_features, [n, width], &device)?;
     let predicted = {

@@ -123,6 +123,7 @@ fn training_beats_the_lbs_baseline_on_unseen_frames() {
         .map(|w| {
             FrameInputs::new(
                 &c.body,
+                &g,
                 &Clip {
                     betas: &c.betas,
                     poses: &c.poses,
@@ -150,6 +151,7 @@ fn training_beats_the_lbs_baseline_on_unseen_frames() {
     let eval = net.valid();
     let f = FrameInputs::new(
         &c.body,
+        &g,
         &Clip {
             betas: &c.betas,
             poses: &c.poses,

@@ -27,8 +27,10 @@ fn skeleton_and_feature_mismatches_are_named() {
         m.contains("joints") && m.contains("22") && m.contains("24"),
         "{m}"
     );
+    let g = GarmentInput::new(&c.garment, &c.body, &c.betas, &cfg).unwrap();
     let m = message(FrameInputs::new(
         &c.body,
+        &g,
         &Clip {
             betas: &c.betas,
             poses: &c.poses,
@@ -40,9 +42,9 @@ fn skeleton_and_feature_mismatches_are_named() {
     ));
     assert!(m.contains("joints"), "{m}");
     // Inputs built for one config fed to a model of another.
-    let g = GarmentInput::new(&c.garment, &c.body, &c.betas, &cfg).unwrap();
     let f = FrameInputs::new(
         &c.body,
+        &g,
         &Clip {
             betas: &c.betas,
             poses: &c.poses,
@@ -79,10 +81,12 @@ fn non_finite_and_out_of_range_inputs_are_refused() {
     let m = message(GarmentInput::new(&c.garment, &c.body, &[f32::NAN], &cfg));
     assert!(m.contains("betas"), "{m}");
 
+    let g = GarmentInput::new(&c.garment, &c.body, &c.betas, &cfg).unwrap();
     let mut poses = c.poses.clone();
     poses[1][2][1] = f32::INFINITY;
     let m = message(FrameInputs::new(
         &c.body,
+        &g,
         &Clip {
             betas: &c.betas,
             poses: &poses,
@@ -97,6 +101,7 @@ fn non_finite_and_out_of_range_inputs_are_refused() {
     trans[2][0] = f32::NAN;
     let m = message(FrameInputs::new(
         &c.body,
+        &g,
         &Clip {
             betas: &c.betas,
             poses: &c.poses,
@@ -109,6 +114,7 @@ fn non_finite_and_out_of_range_inputs_are_refused() {
     assert!(m.contains("translations"), "{m}");
     let m = message(FrameInputs::new(
         &c.body,
+        &g,
         &Clip {
             betas: &c.betas,
             poses: &c.poses,
@@ -121,6 +127,7 @@ fn non_finite_and_out_of_range_inputs_are_refused() {
     assert!(m.contains("root translations"), "{m}");
     let m = message(FrameInputs::new(
         &c.body,
+        &g,
         &Clip {
             betas: &c.betas,
             poses: &c.poses,
@@ -133,6 +140,7 @@ fn non_finite_and_out_of_range_inputs_are_refused() {
     assert!(m.contains("frame window"), "{m}");
     let m = message(FrameInputs::new(
         &c.body,
+        &g,
         &Clip {
             betas: &c.betas,
             poses: &c.poses,

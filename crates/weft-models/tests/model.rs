@@ -19,6 +19,7 @@ fn inputs(
     let g = GarmentInput::new(&c.garment, &c.body, &c.betas, cfg).expect("garment input");
     let f = FrameInputs::new(
         &c.body,
+        &g,
         &Clip {
             betas: &c.betas,
             poses: &c.poses,
@@ -208,4 +209,53 @@ fn pair_encoding_from_feature_tensor() {
     assert!(gx.iter().any(|&v| v != 0.0) && gx.iter().all(|v| v.is_finite()));
     let wrong = Tensor::<2>::zeros([n, 5], &device);
     assert!(net.encode_pair_features(&g, wrong).is_err());
+}
+
+/// `body_contact`: the inputs hold a scaled distance in [−1, 1] and a unit normal per
+/// vertex and frame, the blend shapes depend on them, their map gets a gradient, and
+/// inputs built for the other setting are refused.
+#[test]
+fn body_contact_enters_the_blend_shapes() {
+    let c = case();
+    let cfg = MultilevelConfig::cpu().with_body_contact(true);
+    let (g, f) = inputs(&c, &cfg, 1..3);
+    let contact = f.contact.clone().expect("contact features");
+    assert_eq!(contact.len(), 2 * g.vertex_count() * 4);
+    for row in contact.chunks(4) {
+        assert!((-1.0..=1.0).contains(&row[0]), "{row:?}");
+        let len = row[1..].iter().map(|x| x * x).sum::<f32>().sqrt();
+        assert!((len - 1.0).abs() < 1e-4, "{row:?}");
+    }
+    // A skirt on the body: some vertices near it, none all the way out.
+    assert!(
+        contact.chunks(4).any(|r| r[0] < 0.5),
+        "no vertex near the body"
+    );
+
+    let net = model(&cfg, 5, true);
+    let pair = net.encode_pair(&g).unwrap();
+    let p = net.forward(&pair, &g, &f).unwrap();
+    let mut zeroed = f.clone();
+    zeroed.contact = Some(vec![0.0; contact.len()]);
+    let q = net.forward(&pair, &g, &zeroed).unwrap();
+    assert!(
+        host(p.blend.clone()) != host(q.blend),
+        "blend shapes read the contact"
+    );
+    let grads = p.vertices.sum().backward();
+    for sub in &net.mp {
+        let map = sub.contact.as_ref().expect("contact map");
+        let gw = host(map.weight.val().grad(&grads).expect("contact gradient"));
+        assert!(gw.iter().any(|&x| x != 0.0) && gw.iter().all(|x| x.is_finite()));
+    }
+
+    let (_, plain) = inputs(&c, &MultilevelConfig::cpu(), 1..3);
+    let e = net.forward(&pair, &g, &plain).unwrap_err().to_string();
+    assert!(e.contains("body contact"), "{e}");
+    let without = model(&MultilevelConfig::cpu(), 5, false);
+    let e = without
+        .forward(&without.encode_pair(&g).unwrap(), &g, &f)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("body contact"), "{e}");
 }

@@ -69,6 +69,7 @@ fn predictor_round_trip_and_mismatches() {
     let g = GarmentInput::new(&c.garment, &c.body, &c.betas, &cfg).unwrap();
     let f = FrameInputs::new(
         &c.body,
+        &g,
         &Clip {
             betas: &c.betas,
             poses: &c.poses,

@@ -144,6 +144,14 @@ pub struct MultilevelConfig {
     /// start near zero offsets).
     #[config(default = 0.01)]
     pub blend_gain: f64,
+    /// Give M^mp the body contact of every garment vertex and frame (multilevel::contact;
+    /// not in seed 000): scaled signed distance to the posed body and the body normal in
+    /// the rest frame, added to the embedding of each submodule.
+    #[config(default = false)]
+    pub body_contact: bool,
+    /// Metres at which the contact distance saturates (`h / radius` clamped to ±1).
+    #[config(default = 0.1)]
+    pub contact_radius: f64,
 }
 
 /// Names [`MultilevelConfig::preset`] accepts.
@@ -253,6 +261,12 @@ impl MultilevelConfig {
                     "{name} must be finite and non-negative, got {v}"
                 )));
             }
+        }
+        if !(self.contact_radius.is_finite() && self.contact_radius > 0.0) {
+            return Err(ModelError::Config(format!(
+                "contact_radius must be a positive number of metres, got {}",
+                self.contact_radius
+            )));
         }
         Ok(())
     }

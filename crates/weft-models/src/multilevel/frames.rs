@@ -9,6 +9,8 @@
 //!   over the same `m` frames, oldest first.
 //! - The joint skinning transforms `A_j(θ_t) = G_j · T(−J_j)` of every frame, 3 × 4 row
 //!   major, for the final linear blend skinning of the garment.
+//! - With `body_contact`, the garment's contact with the posed body of every frame
+//!   ([`super::contact`]).
 
 use std::ops::Range;
 
@@ -18,7 +20,8 @@ use weft_body::BodyModel;
 use weft_motion::{pose_history, Motion, Pose};
 
 use super::config::MultilevelConfig;
-use super::garment::{betas_f64, body_sample_indices, check_body};
+use super::contact::{contact_features, CONTACT_FEATURES};
+use super::garment::{betas_f64, body_sample_indices, check_body, GarmentInput};
 use crate::deformer::Clip;
 use crate::error::ModelError;
 
@@ -40,11 +43,13 @@ pub struct FrameInputs {
     pub velocities: Vec<f32>,
     /// `[T, S, 12]`: per joint `[R | t]` row-major.
     pub transforms: Vec<f32>,
+    /// `[T, N, 4]` with `body_contact` ([`super::contact`]), else `None`.
+    pub contact: Option<Vec<f32>>,
 }
 
 impl FrameInputs {
     /// The inputs of motion frames `frames` of `clip` (a non-empty range of
-    /// `0..clip.len()`).
+    /// `0..clip.len()`) for the garment `garment` (read only with `body_contact`).
     ///
     /// Errors: a body whose joint count is not the config's (a motion of another
     /// skeleton: poses are SMPL's 24 joints), `poses` and `trans` of different lengths, an
@@ -52,6 +57,7 @@ impl FrameInputs {
     /// translations or betas.
     pub fn new(
         body: &BodyModel,
+        garment: &GarmentInput,
         clip: &Clip,
         frames: Range<usize>,
         cfg: &MultilevelConfig,
@@ -174,6 +180,37 @@ impl FrameInputs {
             }
         }
         crate::error::check_finite("body velocities", &vel_out)?;
+
+        let contact = if cfg.body_contact {
+            let (n, s) = (garment.vertex_count(), cfg.joints);
+            if garment.joint_count() != s {
+                return Err(ModelError::mismatch(
+                    "garment input joints (config joints)",
+                    s,
+                    garment.joint_count(),
+                ));
+            }
+            let mut out = Vec::with_capacity(t_count * n * CONTACT_FEATURES);
+            for (k, t) in frames.clone().enumerate() {
+                let vertices: Vec<[f64; 3]> =
+                    posed[t - first].iter().map(|p| p.map(f64::from)).collect();
+                let surface = body
+                    .body_surface(&vertices)
+                    .map_err(|e| ModelError::Body(format!("posed body surface: {e}")))?;
+                contact_features(
+                    &garment.rest,
+                    &garment.transfer_weights,
+                    &transforms[k * s * 12..(k + 1) * s * 12],
+                    &surface,
+                    cfg.contact_radius,
+                    &mut out,
+                )?;
+            }
+            crate::error::check_finite("body contact", &out)?;
+            Some(out)
+        } else {
+            None
+        };
         Ok(FrameInputs {
             frames: t_count,
             history: m,
@@ -183,6 +220,7 @@ impl FrameInputs {
             poses: pose_out,
             velocities: vel_out,
             transforms,
+            contact,
         })
     }
 

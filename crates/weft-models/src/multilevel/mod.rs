@@ -5,11 +5,13 @@
 //! - [`config`]: every width and depth, presets `paper` and `cpu`;
 //! - [`garment`]: [`GarmentInput`], the constant inputs of a garment–body pair;
 //! - [`frames`]: [`FrameInputs`], the inputs of a window of frames;
+//! - [`contact`]: where the posed body is, seen from each garment vertex (`body_contact`);
 //! - [`mp`]: one submodule of M^mp (pooling, GAT blocks, unpooling, skips);
 //! - [`model`]: [`Multilevel`], [`PairEncoding`], [`Prediction`];
 //! - [`predictor`]: [`Predictor`], a trained run loaded for inference.
 
 pub mod config;
+pub mod contact;
 pub mod frames;
 pub mod garment;
 pub mod model;

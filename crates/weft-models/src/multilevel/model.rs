@@ -10,7 +10,8 @@
 //! `Wᵗ = softmax_S(ln(w_transfer + ε) + g_W · X^fuse ⊗ E^t1(Θᵗ))` — the prior term is this
 //! implementation's (config `weight_prior`, docs/multilevel.md: the untrained model skins
 //! like the LBS baseline and learns a correction);
-//! `Bᵗ = Σ_submodules M^mp(X^fuse ⊙ E^t2(Vᵗ))`;
+//! `Bᵗ = Σ_submodules M^mp(X^fuse ⊙ E^t2(Vᵗ))` (with `body_contact`, each submodule's
+//! embedding also reads the body contact of every vertex, [`super::contact`]);
 //! `Mᵗ = Σ_j Wᵗ_j A_j(θ_t) (T + Bᵗ)`.
 
 use burn::module::{Module, ModuleVisitor, Param};
@@ -21,6 +22,7 @@ use weft_nn::{
 };
 
 use super::config::MultilevelConfig;
+use super::contact::CONTACT_FEATURES;
 use super::frames::{FrameInputs, POSE_FEATURES};
 use super::garment::GarmentInput;
 use super::mp::MpSubmodule;
@@ -285,9 +287,10 @@ impl Multilevel {
     ) -> Result<Prediction, ModelError> {
         let weights = self.skinning_weights(pair, g, f)?;
         let motion = self.motion_features(g, f)?;
+        let contact = self.contact_features(g, f)?;
         let mut blend: Option<Tensor<2>> = None;
         for k in 0..self.mp.len() {
-            let b = self.blend_submodule(k, pair, g, &motion)?;
+            let b = self.blend_submodule(k, pair, g, &motion, contact.as_ref())?;
             blend = Some(match blend {
                 Some(acc) => acc + b,
                 None => b,
@@ -373,14 +376,41 @@ impl Multilevel {
         Ok(motion2)
     }
 
+    /// Stage of [`Self::forward`]: the body contact of every frame and vertex,
+    /// `[T·N, 4]`, with `body_contact` (`None` without).
+    pub fn contact_features(
+        &self,
+        g: &GarmentInput,
+        f: &FrameInputs,
+    ) -> Result<Option<Tensor<2>>, ModelError> {
+        let (t, n) = (f.frame_count(), g.vertex_count());
+        match (&f.contact, self.config.body_contact) {
+            (None, false) => Ok(None),
+            (Some(c), true) if c.len() == t * n * CONTACT_FEATURES => {
+                Ok(Some(tensor2(c, [t * n, CONTACT_FEATURES], &self.device())))
+            }
+            (c, _) => Err(ModelError::mismatch(
+                "body contact numbers of the frame inputs (config body_contact)",
+                if self.config.body_contact {
+                    t * n * CONTACT_FEATURES
+                } else {
+                    0
+                },
+                c.as_ref().map_or(0, Vec::len),
+            )),
+        }
+    }
+
     /// Stage of [`Self::forward`]: the blend shapes of M^mp submodule `k`, `[T·N, 3]`,
-    /// from the E^t2 features `motion` of [`Self::motion_features`].
+    /// from the E^t2 features `motion` of [`Self::motion_features`] and the contact of
+    /// [`Self::contact_features`].
     pub fn blend_submodule(
         &self,
         k: usize,
         pair: &PairEncoding,
         g: &GarmentInput,
         motion: &Tensor<2>,
+        contact: Option<&Tensor<2>>,
     ) -> Result<Tensor<2>, ModelError> {
         self.check_pair(pair, g)?;
         let sub = self.mp.get(k).ok_or_else(|| {
@@ -388,7 +418,7 @@ impl Multilevel {
         })?;
         let t = motion.dims()[0];
         let batch = g.frame_batch(t)?;
-        sub.forward(pair.fused.clone(), motion.clone(), &batch)
+        sub.forward(pair.fused.clone(), motion.clone(), contact.cloned(), &batch)
     }
 
     /// Stage of [`Self::forward`]: linear blend skinning (eq. 2–3) of `T + Bᵗ` with

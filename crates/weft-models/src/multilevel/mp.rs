@@ -2,7 +2,8 @@
 //! Graph U-Net style:
 //!
 //! 1. embedding GAT: the motion-informed encoding `X̃ = X^fuse ⊙ E^t2(Vᵗ)` to
-//!    `heads × channels`, tanh;
+//!    `heads × channels` (with `body_contact`, plus a linear map of each vertex's contact
+//!    features, [`super::contact`]), tanh;
 //! 2. encoder: `levels` blocks of pooling then GAT (tanh);
 //! 3. decoder: `levels` blocks of unpooling, additive skip from the encoder at the same
 //!    resolution, GAT (tanh);
@@ -20,6 +21,7 @@
 //! (docs/multilevel.md).
 
 use burn::module::{Module, Param};
+use burn::nn::{Linear, LinearConfig};
 use burn::tensor::activation::sigmoid;
 use burn::tensor::Tensor;
 use weft_nn::pool::{
@@ -32,6 +34,7 @@ use weft_nn::{
 };
 
 use super::config::{MultilevelConfig, PoolingKind};
+use super::contact::CONTACT_FEATURES;
 use crate::error::ModelError;
 
 /// `tanh(x) = 2σ(2x) − 1`, the activation of every M^mp GAT block.
@@ -51,6 +54,9 @@ pub fn tanh(x: Tensor<2>) -> Tensor<2> {
 pub struct MpSubmodule {
     /// Embedding GAT `F·S → heads × channels` (its `weight` is scaled per frame).
     pub embed: GatBlock,
+    /// Contact features → `heads × channels`, added to the embedding's transform
+    /// (`body_contact` only).
+    pub contact: Option<Linear>,
     /// Encoder GAT blocks, one per level.
     pub down: Vec<GatBlock>,
     /// Decoder GAT blocks, one per level (finest last).
@@ -83,6 +89,11 @@ impl MpSubmodule {
         };
         let levels = cfg.mp_levels;
         let embed = block(cfg.fused_width())?;
+        let contact = cfg.body_contact.then(|| {
+            LinearConfig::new(CONTACT_FEATURES, width)
+                .with_bias(false)
+                .init(device)
+        });
         let down = (0..levels)
             .map(|_| block(width))
             .collect::<Result<Vec<_>, _>>()?;
@@ -118,6 +129,7 @@ impl MpSubmodule {
         let gain = Param::from_tensor(Tensor::<1>::from_floats([cfg.blend_gain as f32], device));
         Ok(MpSubmodule {
             embed,
+            contact,
             down,
             up,
             out,
@@ -130,23 +142,27 @@ impl MpSubmodule {
     }
 
     /// Blend shapes `[T·N, 3]` of the `T` frames of `batch` from the pair encoding
-    /// `fused` (`[N, F·S]`) and the E^t2 features `motion` (`[T, F·S]`).
+    /// `fused` (`[N, F·S]`), the E^t2 features `motion` (`[T, F·S]`) and, with
+    /// `body_contact`, the contact features `[T·N, 4]`.
     pub fn forward(
         &self,
         fused: Tensor<2>,
         motion: Tensor<2>,
+        contact: Option<Tensor<2>>,
         batch: &HierarchyBatch,
     ) -> Result<Tensor<2>, ModelError> {
-        let x = self.embed(fused, motion, batch.batch(0))?;
+        let x = self.embed(fused, motion, contact, batch.batch(0))?;
         self.process(x, batch)
     }
 
     /// The embedding GAT of every frame, `[T·N, heads·channels]`: one GEMM
-    /// `X [diag(e_1)W | … | diag(e_T)W]`, then attention on the `T` copies of the graph.
+    /// `X [diag(e_1)W | … | diag(e_T)W]` (plus the contact map), then attention on the
+    /// `T` copies of the graph.
     pub fn embed(
         &self,
         fused: Tensor<2>,
         motion: Tensor<2>,
+        contact: Option<Tensor<2>>,
         level0: &GraphBatch,
     ) -> Result<Tensor<2>, ModelError> {
         let [n, fs] = fused.dims();
@@ -166,6 +182,27 @@ impl MpSubmodule {
             .reshape([n, t, hc])
             .swap_dims(0, 1)
             .reshape([t * n, hc]);
+        let z = match (&self.contact, contact) {
+            (None, None) => z,
+            (Some(map), Some(c)) if c.dims() == [t * n, CONTACT_FEATURES] => z + map.forward(c),
+            (Some(_), Some(c)) => {
+                return Err(ModelError::mismatch(
+                    "body contact features (frames × vertices, 4)",
+                    format!("{:?}", [t * n, CONTACT_FEATURES]),
+                    format!("{:?}", c.dims()),
+                ))
+            }
+            (Some(_), None) => {
+                return Err(ModelError::Config(
+                    "the model was built with body_contact but the frame inputs have none".into(),
+                ))
+            }
+            (None, Some(_)) => {
+                return Err(ModelError::Config(
+                    "the frame inputs carry body contact but the model was built without it".into(),
+                ))
+            }
+        };
         let mut x = attention(
             z,
             self.embed.att_src.val(),

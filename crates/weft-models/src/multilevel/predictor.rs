@@ -152,7 +152,7 @@ impl Predictor {
         let pair = self.model.encode_pair(&g)?;
         let mut out = Vec::with_capacity(clip.len());
         for range in windows(clip.len(), ANIMATE_WINDOW, clip.len()) {
-            let f = FrameInputs::new(body, clip, range, &self.config)?;
+            let f = FrameInputs::new(body, &g, clip, range, &self.config)?;
             let p = self.model.forward(&pair, &g, &f)?;
             let [t, n, _] = p.vertices.dims();
             let data = p
@@ -197,12 +197,12 @@ impl Predictor {
             let batch = batch.clamp(1, clip.len());
             let windows = windows(frames.max(batch), batch, clip.len());
             // One untimed window: first-use allocations and the cached frame batch.
-            let warm = FrameInputs::new(body, clip, windows[0].clone(), &self.config)?;
+            let warm = FrameInputs::new(body, &g, clip, windows[0].clone(), &self.config)?;
             self.model.forward(&pair, &g, &warm)?;
             let (mut inputs_s, mut network_s, mut timed) = (0.0, 0.0, 0usize);
             for w in windows {
                 let t0 = Instant::now();
-                let f = FrameInputs::new(body, clip, w.clone(), &self.config)?;
+                let f = FrameInputs::new(body, &g, clip, w.clone(), &self.config)?;
                 let t1 = Instant::now();
                 let p = self.model.forward(&pair, &g, &f)?;
                 // Reading the result back is part of inference (it synchronises the device).

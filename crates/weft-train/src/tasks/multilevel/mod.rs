@@ -137,12 +137,10 @@ impl Pair {
         device: &Device,
     ) -> Result<WindowData> {
         let s = &self.seq;
-        let frames =
-            FrameInputs::new(body, &self.clip(), range.clone(), cfg).map_err(|source| {
-                TrainError::Sequence {
-                    id: s.record.id.clone(),
-                    source,
-                }
+        let frames = FrameInputs::new(body, &self.input, &self.clip(), range.clone(), cfg)
+            .map_err(|source| TrainError::Sequence {
+                id: s.record.id.clone(),
+                source,
             })?;
         let targets = Targets::new(
             &self.topology,
@@ -492,7 +490,13 @@ impl MultilevelTask {
                 }
             };
             let s = &pair.seq;
-            let frames = FrameInputs::new(&self.body, &pair.clip(), range.clone(), &self.cfg)?;
+            let frames = FrameInputs::new(
+                &self.body,
+                &pair.input,
+                &pair.clip(),
+                range.clone(),
+                &self.cfg,
+            )?;
             let pred = model.forward(&enc, &pair.input, &frames)?;
             let n = pair.topology.vertex_count();
             let host: Vec<Vec<[f32; 3]>> = host_positions(&pred.vertices.to_device(&device))?
