@@ -49,7 +49,12 @@ fn run_err(path: &Path, message: impl Into<String>) -> ModelError {
 /// Reads `RUN/config.toml` ([`crate::run::read_run_config`]: header and format version)
 /// and returns its `[model]` table as a Multilevel config.
 pub fn read_run_config(run_dir: &Path) -> Result<MultilevelConfig, ModelError> {
-    let (header, model) = crate::run::model_table(run_dir, ModelKind::Multilevel)?;
+    let (header, mut model) = crate::run::model_table(run_dir, ModelKind::Multilevel)?;
+    // weft writes the whole [model] table, so a table without `body_contact` comes from a
+    // build before it existed, whose models had none (the `cpu` default is now on).
+    model
+        .entry("body_contact")
+        .or_insert(toml::Value::Boolean(false));
     let path = crate::run::RunLayout::new(run_dir).config();
     let cfg =
         MultilevelConfig::from_table(&model, &path.display().to_string()).map_err(|e| match e {
