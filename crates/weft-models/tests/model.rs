@@ -217,7 +217,9 @@ fn pair_encoding_from_feature_tensor() {
 #[test]
 fn body_contact_enters_the_blend_shapes() {
     let c = case();
-    let cfg = MultilevelConfig::cpu().with_body_contact(true);
+    let cfg = MultilevelConfig::cpu();
+    assert!(cfg.body_contact, "the cpu preset reads body contact");
+    assert!(!MultilevelConfig::paper().body_contact, "seed 000 has none");
     let (g, f) = inputs(&c, &cfg, 1..3);
     let contact = f.contact.clone().expect("contact features");
     assert_eq!(contact.len(), 2 * g.vertex_count() * 4);
@@ -249,10 +251,12 @@ fn body_contact_enters_the_blend_shapes() {
         assert!(gw.iter().any(|&x| x != 0.0) && gw.iter().all(|x| x.is_finite()));
     }
 
-    let (_, plain) = inputs(&c, &MultilevelConfig::cpu(), 1..3);
+    let off = MultilevelConfig::cpu().with_body_contact(false);
+    let (_, plain) = inputs(&c, &off, 1..3);
+    assert!(plain.contact.is_none());
     let e = net.forward(&pair, &g, &plain).unwrap_err().to_string();
     assert!(e.contains("body contact"), "{e}");
-    let without = model(&MultilevelConfig::cpu(), 5, false);
+    let without = model(&off, 5, false);
     let e = without
         .forward(&without.encode_pair(&g).unwrap(), &g, &f)
         .unwrap_err()

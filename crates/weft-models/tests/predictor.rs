@@ -93,6 +93,23 @@ fn predictor_round_trip_and_mismatches() {
         .fold(0.0f32, |a, (x, y)| a.max((x - y).abs()));
     assert!(worst < 1e-6, "loaded model differs by {worst}");
 
+    // A run written before `body_contact` existed: its [model] table lacks the key, and
+    // its model had no contact input.
+    let older = cfg.clone().with_body_contact(false);
+    model(&older, 12, false)
+        .save_file(run.join("checkpoints/step-000001.bpk"))
+        .unwrap();
+    write_config(run, RUN_FORMAT_VERSION, "cpu", &older);
+    let text = std::fs::read_to_string(run.join("config.toml")).unwrap();
+    let text: String = text
+        .lines()
+        .filter(|l| !l.starts_with("body_contact"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(run.join("config.toml"), text).unwrap();
+    let loaded = Predictor::load(run).expect("a run from before body_contact");
+    assert!(!loaded.config().body_contact);
+
     // Another format version.
     write_config(run, RUN_FORMAT_VERSION + 1, "cpu", &cfg);
     let m = Predictor::load(run).unwrap_err().to_string();
