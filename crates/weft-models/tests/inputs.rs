@@ -188,3 +188,46 @@ fn configs_round_trip_through_toml_with_defaults() {
     let m = message(MultilevelConfig::from_toml("pool_ratio = 1.5"));
     assert!(m.contains("pool_ratio"), "{m}");
 }
+
+/// `drape`: the template the model skins is the garment settled on the rest body (the
+/// silk skirt settles and its flare narrows), same vertices and faces; an unknown material
+/// is refused by name.
+#[test]
+fn drape_settles_the_template() {
+    let c = case();
+    let cfg = MultilevelConfig::cpu().with_drape(Some("silk".into()));
+    let g = GarmentInput::new(&c.garment, &c.body, &c.betas, &cfg).unwrap();
+    let plain = GarmentInput::new(&c.garment, &c.body, &c.betas, &MultilevelConfig::cpu()).unwrap();
+    assert_eq!(g.vertex_count(), plain.vertex_count());
+    let lowest = |rest: &[f32]| rest.chunks(3).map(|p| p[1]).fold(f32::INFINITY, f32::min);
+    let widest = |rest: &[f32]| {
+        rest.chunks(3)
+            .map(|p| (p[0] * p[0] + p[2] * p[2]).sqrt())
+            .fold(0.0f32, f32::max)
+    };
+    let moved = g
+        .rest
+        .chunks(3)
+        .zip(plain.rest.chunks(3))
+        .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f32>().sqrt())
+        .sum::<f32>()
+        / g.vertex_count() as f32;
+    eprintln!(
+        "mean move {moved}, lowest {} vs {}, widest {} vs {}",
+        lowest(&g.rest),
+        lowest(&plain.rest),
+        widest(&g.rest),
+        widest(&plain.rest)
+    );
+    assert!(
+        moved > 0.001,
+        "the drape moves the cloth: {moved} m on average"
+    );
+    assert!(
+        lowest(&g.rest) <= lowest(&plain.rest),
+        "the hem does not rise"
+    );
+    assert!(widest(&g.rest) < widest(&plain.rest), "the flare narrows");
+    let m = message(cfg.clone().with_drape(Some("chainmail".into())).validate());
+    assert!(m.contains("drape") && m.contains("chainmail"), "{m}");
+}

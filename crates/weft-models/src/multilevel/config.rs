@@ -154,6 +154,12 @@ pub struct MultilevelConfig {
     /// Metres at which the contact distance saturates (`h / radius` clamped to ±1).
     #[config(default = 0.1)]
     pub contact_radius: f64,
+    /// Drape every garment on its body's rest pose with this material (a preset name of
+    /// weft_sim::Material) before building its inputs (weft_garment::prepare::drape; not
+    /// in seed 000): the template `T` the network deforms and skins is then the garment
+    /// as it hangs, not as it was cut. `None` (the default): the garment as given.
+    #[config(default = "None")]
+    pub drape: Option<String>,
 }
 
 /// Names [`MultilevelConfig::preset`] accepts.
@@ -264,6 +270,11 @@ impl MultilevelConfig {
                     "{name} must be finite and non-negative, got {v}"
                 )));
             }
+        }
+        if let Some(name) = &self.drape {
+            weft_sim::Material::preset(name).map_err(|e| {
+                ModelError::Config(format!("drape must name a material preset: {e}"))
+            })?;
         }
         if !(self.contact_radius.is_finite() && self.contact_radius > 0.0) {
             return Err(ModelError::Config(format!(

@@ -108,6 +108,31 @@ pub(crate) fn betas_f64(betas: &[f32]) -> Result<Vec<f64>, ModelError> {
     Ok(betas.iter().map(|&b| f64::from(b)).collect())
 }
 
+/// `garment` settled on the rest pose of `body` at `betas` in `material` (config
+/// `drape`): weft-garment's drape with its defaults (top opening held, gravity ramped,
+/// damped until still), the garment's own shape as the rest shape of the cloth.
+pub fn drape_on(
+    garment: &TriMesh,
+    body: &BodyModel,
+    betas: &[f32],
+    material: &str,
+) -> Result<TriMesh, ModelError> {
+    let err = |e: String| ModelError::Garment(format!("draping in {material}: {e}"));
+    let material = weft_sim::Material::preset(material).map_err(|e| err(e.to_string()))?;
+    let fit =
+        weft_garment::FitBody::new(body, &betas_f64(betas)?).map_err(|e| err(e.to_string()))?;
+    let report = weft_garment::prepare::drape(
+        garment,
+        &fit,
+        &material,
+        &weft_garment::prepare::DrapeOptions::default(),
+    )
+    .map_err(|e| err(e.to_string()))?;
+    let mut draped = garment.clone();
+    draped.positions = report.positions;
+    Ok(draped)
+}
+
 impl GarmentInput {
     /// Precomputes the inputs of `garment` (rest pose of `body` at shape `betas`).
     ///
@@ -151,6 +176,14 @@ impl GarmentInput {
                 "face {f} = {face:?} indexes past the {n} vertices"
             )));
         }
+        let draped;
+        let garment = match &cfg.drape {
+            Some(material) => {
+                draped = drape_on(garment, body, betas, material)?;
+                &draped
+            }
+            None => garment,
+        };
         let shaped = body
             .shaped(&betas_f64(betas)?)
             .map_err(crate::error::body_err("shaping the body"))?;

@@ -99,15 +99,35 @@ pub struct MultilevelTask {
     cache_encodings: bool,
 }
 
+/// Garment inputs already built, by garment and body shape: a dataset puts each
+/// garment–body pair on several motions, and a pair's inputs (a drape, the Nyström
+/// spectrum, the hierarchy) do not depend on the motion.
+type InputCache = HashMap<(String, Vec<u32>), GarmentInput>;
+
 impl Pair {
-    fn new(seq: Sequence, body: &BodyModel, cfg: &MultilevelConfig) -> Result<Self> {
-        let input =
-            GarmentInput::new(&seq.garment, body, &seq.record.betas, cfg).map_err(|source| {
-                TrainError::Sequence {
-                    id: seq.record.id.clone(),
-                    source,
-                }
-            })?;
+    fn new(
+        seq: Sequence,
+        body: &BodyModel,
+        cfg: &MultilevelConfig,
+        inputs: &mut InputCache,
+    ) -> Result<Self> {
+        let key = (
+            seq.record.garment_id.clone(),
+            seq.record.betas.iter().map(|b| b.to_bits()).collect(),
+        );
+        let input = match inputs.get(&key) {
+            Some(input) if input.vertex_count() == seq.garment.vertex_count() => input.clone(),
+            _ => {
+                let input = GarmentInput::new(&seq.garment, body, &seq.record.betas, cfg).map_err(
+                    |source| TrainError::Sequence {
+                        id: seq.record.id.clone(),
+                        source,
+                    },
+                )?;
+                inputs.insert(key, input.clone());
+                input
+            }
+        };
         let topology = GarmentTopology::new(&seq.garment)?;
         let uvs = (seq.corner_uvs.len() == seq.garment.face_count()).then_some(&seq.corner_uvs[..]);
         let frames = rest_frames(&seq.garment, uvs)?;
@@ -192,8 +212,11 @@ impl MultilevelTask {
         validation: Vec<Sequence>,
         device: &Device,
     ) -> Result<Self> {
-        let build = |seqs: Vec<Sequence>| -> Result<Vec<Pair>> {
-            seqs.into_iter().map(|s| Pair::new(s, &body, cfg)).collect()
+        let mut inputs = InputCache::new();
+        let mut build = |seqs: Vec<Sequence>| -> Result<Vec<Pair>> {
+            seqs.into_iter()
+                .map(|s| Pair::new(s, &body, cfg, &mut inputs))
+                .collect()
         };
         let train = build(train)?;
         let validation = build(validation)?;
