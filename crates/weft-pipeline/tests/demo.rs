@@ -25,6 +25,11 @@ fn quick_demo_runs_every_stage_and_resumes() {
     .unwrap();
     assert!(s.report.is_file());
     assert!(s.model_mm.is_finite() && s.lbs_mm > 5.0, "{s:?}");
+    assert!(
+        (0.0..=1.0).contains(&s.animation_inside) && s.animation_deepest_mm >= 0.0,
+        "{s:?}"
+    );
+    assert!(lines.iter().any(|l| l.contains("inside the body")));
     let files: [PathBuf; 7] = [
         out.join("run/report/eval.json"),
         out.join("run/report/eval.html"),
