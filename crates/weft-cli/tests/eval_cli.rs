@@ -130,6 +130,11 @@ fn animate_exports_an_unseen_garment() {
     assert_eq!(pc2.frames.frame_count(), 5);
     let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert!(report["pushed_out_vertices"].is_u64(), "{report}");
+    // The check runs on what was written: after a 4 mm push-out nothing is inside.
+    let check = &report["check"];
+    assert_eq!(check["frames"], 5, "{report}");
+    assert_eq!(check["inside"].as_f64(), Some(0.0), "{report}");
+    assert!(check["strain_max"].as_f64().is_some_and(|m| m >= 0.0), "{report}");
     let o = animate(&[
         "--motion",
         "walk",

@@ -150,6 +150,92 @@ pub fn push_out_of_body(
     Ok(moved)
 }
 
+/// What an animation without ground truth is checked for, over all its frames: how far
+/// it stretches the cloth and how much of it is inside the body (a rollout's strain and
+/// penetration over the whole sequence; legs through a skirt).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct AnimationCheck {
+    /// Frames checked.
+    pub frames: usize,
+    /// Mean `|l / l₀ − 1|` over every edge of every frame, against the garment as given.
+    pub strain_mean: f64,
+    /// The largest.
+    pub strain_max: f64,
+    /// Share of the vertices, over every frame, inside the posed body.
+    pub inside: f64,
+    /// The deepest of them, mm (0 when none is inside).
+    pub deepest_mm: f64,
+    /// Vertex positions that were not finite (left out of the figures above).
+    pub nonfinite: usize,
+}
+
+/// [`AnimationCheck`] of `frames` of `garment`; `posed` holds the body at each frame.
+pub fn check_animation(
+    garment: &TriMesh,
+    frames: &[Vec<[f32; 3]>],
+    posed: &PosedSequence,
+) -> Result<AnimationCheck, EvalError> {
+    if posed.len() < frames.len() {
+        return Err(EvalError::Count {
+            what: "posed body frames vs garment frames",
+            expected: frames.len(),
+            found: posed.len(),
+        });
+    }
+    let topology = crate::metrics::GarmentTopology::new(garment)?;
+    let (mut strain_sum, mut strain_count, mut strain_max) = (0.0, 0usize, 0.0f64);
+    let (mut inside, mut checked, mut deepest, mut nonfinite) = (0usize, 0usize, 0.0f64, 0);
+    for (t, frame) in frames.iter().enumerate() {
+        for e in crate::metrics::edge_strains(&topology.edges, &topology.rest_lengths, frame)? {
+            if e.is_finite() {
+                strain_sum += e;
+                strain_count += 1;
+                strain_max = strain_max.max(e);
+            }
+        }
+        let finite: Vec<[f32; 3]> = frame
+            .iter()
+            .copied()
+            .filter(|p| p.iter().all(|x| x.is_finite()))
+            .collect();
+        nonfinite += frame.len() - finite.len();
+        let surface = posed.surface(t)?;
+        for d in crate::metrics::body_signed_distances(&surface, &finite)? {
+            checked += 1;
+            if d < 0.0 {
+                inside += 1;
+                deepest = deepest.max(-d);
+            }
+        }
+    }
+    Ok(AnimationCheck {
+        frames: frames.len(),
+        strain_mean: strain_sum / strain_count.max(1) as f64,
+        strain_max,
+        inside: inside as f64 / checked.max(1) as f64,
+        deepest_mm: 1e3 * deepest,
+        nonfinite,
+    })
+}
+
+impl std::fmt::Display for AnimationCheck {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "over {} frames: edge strain mean {:.2} %, max {:.1} %; {:.2} % of the vertices inside the body, deepest {:.1} mm",
+            self.frames,
+            100.0 * self.strain_mean,
+            100.0 * self.strain_max,
+            100.0 * self.inside,
+            self.deepest_mm
+        )?;
+        if self.nonfinite > 0 {
+            write!(f, "; {} non-finite vertex positions", self.nonfinite)?;
+        }
+        Ok(())
+    }
+}
+
 /// Writes `frames` of `garment` (with its corner `uvs`, when it has them) to `out` in
 /// `format` at `fps`; for the scene formats (glb, usd), `body` (faces and frames) is
 /// added as a second animated mesh.

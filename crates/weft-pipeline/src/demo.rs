@@ -21,7 +21,7 @@ use weft_data::{
     generate, DataConfig, GarmentSpec, GenerateOptions, MotionSpec as DataMotion, Progress,
     SequenceSimulator, Split,
 };
-use weft_eval::animate::{animate, write_animation, MotionSpec};
+use weft_eval::animate::{animate, check_animation, write_animation, AnimationCheck, MotionSpec};
 use weft_eval::attribution::DEFAULT_SAMPLES;
 use weft_eval::evaluate::{error_and_speed_tables, EvalOptions};
 use weft_eval::explain::explain_vertex;
@@ -62,11 +62,9 @@ pub struct DemoSummary {
     pub model_mm: f64,
     /// Mean vertex error of the LBS baseline (mm).
     pub lbs_mm: f64,
-    /// Share of the animation's garment vertices inside the posed body, over every frame
-    /// (the unseen garment has no ground truth: this is what shows legs through it).
-    pub animation_inside: f64,
-    /// The deepest of them, mm.
-    pub animation_deepest_mm: f64,
+    /// The animation's strain and vertices inside the body (the unseen garment has no
+    /// ground truth: this is what shows legs through it).
+    pub animation: AnimationCheck,
     /// Seconds per stage: data, training, evaluation, animation, attribution.
     pub seconds: [f64; 5],
 }
@@ -329,16 +327,14 @@ pub fn run_demo(
     let sheet = render_sequence(&scenes, &labels, &ropts, Some(3))?.image;
     let sheet_path = anim_dir.join("animation.png");
     sheet.write_png(&sheet_path)?;
-    let (animation_inside, animation_deepest_mm) = inside_the_body(&body, &posed, &animated)?;
+    let check = check_animation(&garment, &animated, &posed)?;
     log(&format!(
-        "      {} frames of {} vertices: {}, {}, {}\n      inside the body: {:.2} % of the vertices over all frames, deepest {:.1} mm",
+        "      {} frames of {} vertices: {}, {}, {}\n      {check}",
         animated.len(),
         garment.vertex_count(),
         glb.display(),
         pc2.display(),
         sheet_path.display(),
-        100.0 * animation_inside,
-        animation_deepest_mm
     ));
     seconds[3] = t.elapsed().as_secs_f64();
 
@@ -419,12 +415,7 @@ pub fn run_demo(
         (run_dir.join("curves.png"), "Training curves."),
         (
             sheet_path.clone(),
-            &format!(
-                "An unseen garment on an unseen body shape and motion: {:.2} % of its vertices inside the body over the {} frames, deepest {:.1} mm.",
-                100.0 * animation_inside,
-                animated.len(),
-                animation_deepest_mm
-            ),
+            &format!("An unseen garment on an unseen body shape and motion; {check}."),
         ),
         (
             attr_path.clone(),
@@ -466,41 +457,7 @@ pub fn run_demo(
         report: report_path,
         model_mm,
         lbs_mm,
-        animation_inside,
-        animation_deepest_mm,
+        animation: check,
         seconds,
     })
-}
-
-/// Share of `frames`' vertices inside the posed body of each frame, and the deepest (mm).
-fn inside_the_body(
-    body: &weft_body::BodyModel,
-    posed: &PosedSequence,
-    frames: &[Vec<[f32; 3]>],
-) -> Result<(f64, f64), PipelineError> {
-    let (mut inside, mut total, mut deepest) = (0usize, 0usize, 0.0f64);
-    let mut surface: Option<weft_body::query::BodySurface> = None;
-    for (t, frame) in frames.iter().enumerate() {
-        let Some(mesh) = posed.mesh(t) else { break };
-        let query = |e: weft_body::query::QueryError| {
-            PipelineError::Invalid(format!("body surface of animation frame {t}: {e}"))
-        };
-        // Built once, refit for the next frames (same faces).
-        let surface = match &mut surface {
-            Some(s) => {
-                s.refit(&mesh.positions).map_err(query)?;
-                s
-            }
-            None => surface.insert(body.body_surface(&mesh.positions).map_err(query)?),
-        };
-        let points: Vec<[f64; 3]> = frame.iter().map(|p| p.map(f64::from)).collect();
-        for d in surface.signed_distances(&points).map_err(query)? {
-            total += 1;
-            if d < 0.0 {
-                inside += 1;
-                deepest = deepest.max(-d);
-            }
-        }
-    }
-    Ok((inside as f64 / total.max(1) as f64, 1e3 * deepest))
 }

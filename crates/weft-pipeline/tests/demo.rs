@@ -25,10 +25,12 @@ fn quick_demo_runs_every_stage_and_resumes() {
     .unwrap();
     assert!(s.report.is_file());
     assert!(s.model_mm.is_finite() && s.lbs_mm > 5.0, "{s:?}");
+    let a = s.animation;
     assert!(
-        (0.0..=1.0).contains(&s.animation_inside) && s.animation_deepest_mm >= 0.0,
+        (0.0..=1.0).contains(&a.inside) && a.deepest_mm >= 0.0 && a.strain_max >= a.strain_mean,
         "{s:?}"
     );
+    assert!(a.frames > 0 && a.nonfinite == 0, "{s:?}");
     assert!(lines.iter().any(|l| l.contains("inside the body")));
     let files: [PathBuf; 7] = [
         out.join("run/report/eval.json"),

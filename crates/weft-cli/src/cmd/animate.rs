@@ -8,7 +8,7 @@ use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
 use weft_body::PosedSequence;
-use weft_eval::animate::{animate, push_out_of_body, write_animation};
+use weft_eval::animate::{animate, check_animation, push_out_of_body, write_animation};
 use weft_eval::skinned::write_skinned_animation;
 use weft_garment::prepare::{fit_onto, FitOntoOptions};
 use weft_garment::FitBody;
@@ -169,34 +169,23 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     };
     // The body goes into a morph-target scene here; a skinned one poses it itself.
     let scene_body = format.holds_scene() && !args.skinned;
-    let posed = if args.push_out.is_some() || scene_body {
-        Some(PosedSequence::new(
-            &body,
-            &betas,
-            motion.poses(),
-            motion.trans(),
-        )?)
-    } else {
-        None
+    let posed = PosedSequence::new(&body, &betas, motion.poses(), motion.trans())?;
+    let pushed = match args.push_out {
+        Some(mm) => Some(push_out_of_body(&mut frames, &posed, mm / 1000.0)?),
+        None => None,
     };
-    let pushed = match (args.push_out, &posed) {
-        (Some(mm), Some(posed)) => Some(push_out_of_body(&mut frames, posed, mm / 1000.0)?),
-        _ => None,
-    };
-    let bodies = match &posed {
-        Some(posed) if scene_body => Some(
-            (0..posed.len())
-                .filter_map(|t| posed.mesh(t))
-                .map(|m| {
-                    m.positions
-                        .iter()
-                        .map(|p| p.map(|x| x as f32))
-                        .collect::<Vec<[f32; 3]>>()
-                })
-                .collect::<Vec<_>>(),
-        ),
-        _ => None,
-    };
+    let check = check_animation(&garment, &frames, &posed)?;
+    let bodies = scene_body.then(|| {
+        (0..posed.len())
+            .filter_map(|t| posed.mesh(t))
+            .map(|m| {
+                m.positions
+                    .iter()
+                    .map(|p| p.map(|x| x as f32))
+                    .collect::<Vec<[f32; 3]>>()
+            })
+            .collect::<Vec<_>>()
+    });
     if args.skinned {
         write_skinned_animation(
             &garment,
@@ -220,7 +209,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     }
     if let Some((frame, why)) = &stopped {
         bail!(
-            "the rollout diverged at frame {frame}: {why}; the {} finished frames were written to {}",
+            "the rollout diverged at frame {frame}: {why}; the {} finished frames were written to {} ({check})",
             frames.len(),
             args.out.display()
         );
@@ -235,6 +224,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             "model": deformer.name(),
             "inference_seconds": seconds,
             "pushed_out_vertices": pushed,
+            "check": check,
         }))?)?;
     } else {
         emit(&format!(
@@ -252,6 +242,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
                 "pushed {n} vertex positions (over all frames) out of the body"
             ))?;
         }
+        emit(&check.to_string())?;
     }
     Ok(())
 }
