@@ -108,6 +108,16 @@ impl PosedBody {
         Ok(())
     }
 
+    /// Moves the body to `positions` (same vertex count) with a fresh tree, at rest there
+    /// (no motion remembered): for a pose far from the one the tree was built on. The
+    /// edge numbering of the pseudo-normals is kept, so this costs a tree build, not the
+    /// sort of every half-edge that [`PosedBody::new`] does.
+    pub fn rebuild(&mut self, positions: &[[f64; 3]]) -> Result<(), SimError> {
+        self.surface.rebuild(positions)?;
+        self.settle();
+        Ok(())
+    }
+
     /// Forgets the motion of the last refit (the body is taken to be at rest).
     pub fn settle(&mut self) {
         self.previous.clear();

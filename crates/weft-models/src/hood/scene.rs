@@ -132,6 +132,8 @@ pub struct Scene {
     pub skinned: Vec<Vec<[f64; 3]>>,
     /// Seconds per frame.
     pub dt: f64,
+    /// The body surface at rest, rebuilt at each step's pose ([`Scene::posed_body`]).
+    rest_body: PosedBody,
 }
 
 fn f64s(frame: &[[f32; 3]]) -> Vec<[f64; 3]> {
@@ -176,10 +178,15 @@ impl Scene {
         let rest_body = body
             .shape(&clip.betas.iter().map(|&b| f64::from(b)).collect::<Vec<_>>())
             .map_err(body_err("shaping the body"))?;
-        PosedBody::new(&rest_body.positions, &rest_body.faces)
-            .and_then(|b| b.signed_distances(&garment.positions))
+        let on_rest = |e: weft_sim::SimError| {
+            ModelError::Garment(format!("the garment on the rest body: {e}"))
+        };
+        let rest_surface =
+            PosedBody::new(&rest_body.positions, &rest_body.faces).map_err(on_rest)?;
+        rest_surface
+            .signed_distances(&garment.positions)
             .and_then(check_garment_gap)
-            .map_err(|e| ModelError::Garment(format!("the garment on the rest body: {e}")))?;
+            .map_err(on_rest)?;
         let skinned: Vec<Vec<[f64; 3]>> = SkinnedGarment::diffused(garment, body, clip.betas)?
             .animate(body, clip, weft_body::Skinning::Lbs)?
             .iter()
@@ -197,6 +204,7 @@ impl Scene {
             },
             skinned,
             dt: 1.0 / clip.fps,
+            rest_body: rest_surface,
         })
     }
 
@@ -271,7 +279,8 @@ impl Scene {
     /// from frame `at.t` (the settling step: still at `at.t`).
     pub fn posed_body(&self, at: StepAt) -> Result<PosedBody, ModelError> {
         let sim = |e: weft_sim::SimError| ModelError::Body(format!("the posed body: {e}"));
-        let mut body = PosedBody::new(&self.body[at.t], &self.faces).map_err(sim)?;
+        let mut body = self.rest_body.clone();
+        body.rebuild(&self.body[at.t]).map_err(sim)?;
         if !at.settle {
             body.refit(&self.body[at.t + 1]).map_err(sim)?;
         }

@@ -44,7 +44,7 @@ use weft_models::hood::{
 };
 use weft_models::Clip;
 use weft_motion::{MotionKind, ProceduralParams};
-use weft_sim::{sample_hood_material, Attachment, Energy, Material, PosedBody, StepInputs};
+use weft_sim::{sample_hood_material, Attachment, Energy, Material, StepInputs};
 
 pub use config::{HoodRun, HoodTraining, COLLISION_LEVELS};
 
@@ -691,7 +691,12 @@ impl TrainTask for HoodTask {
             let rest_edges = scene.garment.rest.edges();
             let rest = &scene.garment.rest.positions;
             for (t, x) in r.frames.iter().enumerate() {
-                let body = PosedBody::new(&scene.body[t], &scene.faces)?;
+                let body = scene.posed_body(StepAt {
+                    t,
+                    settle: true,
+                    dt: scene.dt,
+                    buttoned: true,
+                })?;
                 inside += body.penetration(x, 0.0)?.count;
                 vertices += x.len();
                 for &[a, b] in &rest_edges {
