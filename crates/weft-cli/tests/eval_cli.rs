@@ -134,7 +134,10 @@ fn animate_exports_an_unseen_garment() {
     let check = &report["check"];
     assert_eq!(check["frames"], 5, "{report}");
     assert_eq!(check["inside"].as_f64(), Some(0.0), "{report}");
-    assert!(check["strain_max"].as_f64().is_some_and(|m| m >= 0.0), "{report}");
+    assert!(
+        check["strain_max"].as_f64().is_some_and(|m| m >= 0.0),
+        "{report}"
+    );
     let o = animate(&[
         "--motion",
         "walk",
