@@ -51,12 +51,4 @@ pub enum BodyError {
     /// A posed surface could not be built for queries.
     #[error(transparent)]
     Query(#[from] crate::query::QueryError),
-    /// A frame index past the end of a posed sequence.
-    #[error("frame {index} of a posed body sequence of {frames} frames")]
-    Frame {
-        /// The index asked for.
-        index: usize,
-        /// Frames in the sequence.
-        frames: usize,
-    },
 }

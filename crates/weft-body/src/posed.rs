@@ -6,7 +6,7 @@ use weft_mesh::TriMesh;
 
 use crate::error::BodyError;
 use crate::model::BodyModel;
-use crate::query::BodySurface;
+use crate::query::{BodySurface, MovingSurface};
 use crate::skinning::Skinning;
 
 /// The body at shape `betas`, posed frame by frame (LBS with the model's pose blend
@@ -65,14 +65,18 @@ impl PosedSequence {
         self.frames.get(t).map(Vec::as_slice)
     }
 
-    /// The closest-point and signed-distance surface of frame `t`.
-    pub fn surface(&self, t: usize) -> Result<BodySurface, BodyError> {
-        let frame = self.frames.get(t).ok_or(BodyError::Frame {
-            index: t,
-            frames: self.frames.len(),
-        })?;
-        let p: Vec<[f64; 3]> = frame.iter().map(|v| v.map(f64::from)).collect();
-        Ok(BodySurface::new(&p, &self.faces)?)
+    /// Calls `visit(t, surface)` with the closest-point and signed-distance surface of
+    /// every frame in order (built on the first, refit for the next: [`MovingSurface`]).
+    pub fn for_each_surface<E: From<BodyError>>(
+        &self,
+        mut visit: impl FnMut(usize, &BodySurface) -> Result<(), E>,
+    ) -> Result<(), E> {
+        let mut moving = MovingSurface::new(&self.faces);
+        for (t, frame) in self.frames.iter().enumerate() {
+            let surface = moving.frame(frame).map_err(BodyError::from)?;
+            visit(t, surface)?;
+        }
+        Ok(())
     }
 
     /// The posed body mesh of frame `t` (for pictures and exports).
@@ -106,8 +110,15 @@ mod tests {
             .zip(b)
             .filter(|(p, q)| (q[1] - p[1] - 0.5).abs() > 1e-3);
         assert!(moved.count() > 0);
-        assert!(posed.surface(1).is_ok());
-        assert!(matches!(posed.surface(2), Err(BodyError::Frame { .. })));
+        let mut visited = 0;
+        posed
+            .for_each_surface(|t, s| {
+                assert_eq!(s.positions().len(), a.len(), "frame {t}");
+                visited += 1;
+                Ok::<_, BodyError>(())
+            })
+            .unwrap();
+        assert_eq!(visited, 2);
         assert_eq!(posed.mesh(0).unwrap().faces.len(), body.faces().len());
         // Counts that disagree, and NaN, are errors.
         assert!(PosedSequence::new(&body, &[], &poses, &trans[..1]).is_err());

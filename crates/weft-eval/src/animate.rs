@@ -138,15 +138,16 @@ pub fn push_out_of_body(
         });
     }
     let mut moved = 0;
-    for (t, frame) in frames.iter_mut().enumerate() {
-        let surface = posed.surface(t)?;
+    posed.for_each_surface(|t, surface| {
+        let frame = &mut frames[t];
         let mut points: Vec<[f64; 3]> = frame.iter().map(|p| p.map(f64::from)).collect();
-        moved += weft_garment::onbody::push_out(&surface, &mut points, margin)
+        moved += weft_garment::onbody::push_out(surface, &mut points, margin)
             .map_err(|e| EvalError::Invalid(format!("push-out of frame {t}: {e}")))?;
         for (dst, src) in frame.iter_mut().zip(&points) {
             *dst = src.map(|x| x as f32);
         }
-    }
+        Ok::<_, EvalError>(())
+    })?;
     Ok(moved)
 }
 
@@ -185,7 +186,10 @@ pub fn check_animation(
     let topology = crate::metrics::GarmentTopology::new(garment)?;
     let (mut strain_sum, mut strain_count, mut strain_max) = (0.0, 0usize, 0.0f64);
     let (mut inside, mut checked, mut deepest, mut nonfinite) = (0usize, 0usize, 0.0f64, 0);
-    for (t, frame) in frames.iter().enumerate() {
+    posed.for_each_surface(|t, surface| {
+        let Some(frame) = frames.get(t) else {
+            return Ok(());
+        };
         for e in crate::metrics::edge_strains(&topology.edges, &topology.rest_lengths, frame)? {
             if e.is_finite() {
                 strain_sum += e;
@@ -199,15 +203,15 @@ pub fn check_animation(
             .filter(|p| p.iter().all(|x| x.is_finite()))
             .collect();
         nonfinite += frame.len() - finite.len();
-        let surface = posed.surface(t)?;
-        for d in crate::metrics::body_signed_distances(&surface, &finite)? {
+        for d in crate::metrics::body_signed_distances(surface, &finite)? {
             checked += 1;
             if d < 0.0 {
                 inside += 1;
                 deepest = deepest.max(-d);
             }
         }
-    }
+        Ok::<_, EvalError>(())
+    })?;
     Ok(AnimationCheck {
         frames: frames.len(),
         strain_mean: strain_sum / strain_count.max(1) as f64,
@@ -312,17 +316,21 @@ mod tests {
         let margin = 0.004;
         let moved = push_out_of_body(&mut frames, &posed, margin).unwrap();
         assert_eq!(moved, 2);
-        for (t, frame) in frames.iter().enumerate() {
-            assert_eq!(frame[1], far);
-            let p = frame[0].map(f64::from);
-            let d = posed.surface(t).unwrap().closest_points(&[p]).unwrap()[0].signed_distance;
-            // Outside; at most `margin` out (concave parts of the body, here the crotch,
-            // can leave it nearer than `margin` to another triangle).
-            assert!(
-                d > 0.0 && d <= margin + 1e-6,
-                "frame {t}: signed distance {d}"
-            );
-        }
+        posed
+            .for_each_surface(|t, surface| {
+                assert_eq!(frames[t][1], far);
+                let d = surface
+                    .signed_distance(frames[t][0].map(f64::from))
+                    .unwrap();
+                // Outside; at most `margin` out (concave parts of the body, here the
+                // crotch, can leave it nearer than `margin` to another triangle).
+                assert!(
+                    d > 0.0 && d <= margin + 1e-6,
+                    "frame {t}: signed distance {d}"
+                );
+                Ok::<_, EvalError>(())
+            })
+            .unwrap();
         assert!(push_out_of_body(&mut frames[..1], &posed, margin).is_err());
     }
 }

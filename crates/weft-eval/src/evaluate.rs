@@ -13,6 +13,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
+use weft_body::query::BodySurface;
 use weft_body::{BodyModel, PosedSequence};
 use weft_data::{Dataset, Sequence, Split};
 use weft_mesh::TriMesh;
@@ -249,17 +250,19 @@ impl<'a> Evaluator<'a> {
         };
         let topology = GarmentTopology::new(&seq.garment)?;
         let kind = seq.record.garment_kind.clone();
-        for (t, truth) in seq.positions.iter().enumerate() {
-            let surface = match (&bodies, self.opts.collisions) {
-                (Some(b), true) => Some(b.surface(t)?),
-                _ => None,
-            };
+        let mut score = |t: usize, surface: Option<&BodySurface>| -> Result<(), EvalError> {
             for (scores, frames) in self.scores.iter_mut().zip(&predicted) {
                 scores
                     .get(&kind)
-                    .push_frame(&topology, &frames[t], truth, surface.as_ref())?;
+                    .push_frame(&topology, &frames[t], &seq.positions[t], surface)?;
             }
             self.frames += 1;
+            Ok(())
+        };
+        // `bodies` holds one frame per ground-truth frame (the clip was cut to them).
+        match (&bodies, self.opts.collisions) {
+            (Some(b), true) => b.for_each_surface(|t, s| score(t, Some(s)))?,
+            _ => (0..seq.positions.len()).try_for_each(|t| score(t, None))?,
         }
         if self.sequences == 0 && !self.opts.fps_batches.is_empty() {
             for (m, fps) in self.methods.iter().zip(&mut self.fps) {

@@ -10,6 +10,8 @@
 //!   coordinates, point, distance, feature, normals) and
 //!   [`BodySurface::signed_distance`] (sign from the pseudo-normal of the closest
 //!   feature, exact on closed surfaces), one point at a time or batched with rayon.
+//! * [`MovingSurface`]: a [`BodySurface`] following a body's frames, built once and
+//!   refit per frame.
 //! * [`VertexTree`]: the body's vertices in such a tree, for HOOD's body edges
 //!   ([`VertexTree::body_edges`], seed 004 §3.1).
 //!
@@ -19,6 +21,7 @@
 pub mod aabb_tree;
 pub mod closest;
 pub mod error;
+pub mod moving;
 mod pseudo_normal;
 pub mod radius;
 pub mod signed;
@@ -28,6 +31,7 @@ pub mod triangle;
 pub use aabb_tree::AabbTree;
 pub use closest::{ClosestPoint, SurfaceFeature};
 pub use error::QueryError;
+pub use moving::MovingSurface;
 pub use radius::{BodyEdge, BodyEdgeRule, VertexTree};
 pub use surface::BodySurface;
 pub use triangle::{closest_point_on_triangle, LocalFeature, TrianglePoint};

@@ -15,7 +15,7 @@
 use std::ops::Range;
 
 use weft_body::features::velocity_window;
-use weft_body::query::BodySurface;
+use weft_body::query::MovingSurface;
 use weft_body::skinning::Skinning;
 use weft_body::BodyModel;
 use weft_motion::{pose_history, Motion, Pose};
@@ -193,18 +193,9 @@ impl FrameInputs {
             }
             let mut out = Vec::with_capacity(t_count * n * CONTACT_FEATURES);
             let surface_err = |e| ModelError::Body(format!("posed body surface: {e}"));
-            // Built on the window's first frame, refit for the next (same faces).
-            let mut surface: Option<BodySurface> = None;
+            let mut surface = MovingSurface::new(body.faces());
             for (k, t) in frames.clone().enumerate() {
-                let vertices: Vec<[f64; 3]> =
-                    posed[t - first].iter().map(|p| p.map(f64::from)).collect();
-                let surface = match &mut surface {
-                    Some(s) => {
-                        s.refit(&vertices).map_err(surface_err)?;
-                        s
-                    }
-                    None => surface.insert(body.body_surface(&vertices).map_err(surface_err)?),
-                };
+                let surface = surface.frame(&posed[t - first]).map_err(surface_err)?;
                 contact_features(
                     &garment.rest,
                     &garment.transfer_weights,
