@@ -65,6 +65,16 @@ impl PosedSequence {
         self.frames.get(t).map(Vec::as_slice)
     }
 
+    /// The posed vertices of every frame, in order.
+    pub fn frames(&self) -> impl ExactSizeIterator<Item = &[[f32; 3]]> {
+        self.frames.iter().map(Vec::as_slice)
+    }
+
+    /// The posed vertices of every frame, without a copy.
+    pub fn into_frames(self) -> Vec<Vec<[f32; 3]>> {
+        self.frames
+    }
+
     /// Calls `visit(t, surface)` with the closest-point and signed-distance surface of
     /// every frame in order (built on the first, refit for the next: [`MovingSurface`]).
     pub fn for_each_surface<E: From<BodyError>>(
@@ -72,7 +82,7 @@ impl PosedSequence {
         mut visit: impl FnMut(usize, &BodySurface) -> Result<(), E>,
     ) -> Result<(), E> {
         let mut moving = MovingSurface::new(&self.faces);
-        for (t, frame) in self.frames.iter().enumerate() {
+        for (t, frame) in self.frames().enumerate() {
             let surface = moving.frame(frame).map_err(BodyError::from)?;
             visit(t, surface)?;
         }

@@ -7,8 +7,8 @@
 
 use std::path::Path;
 
-use weft_body::BodyModel;
-use weft_body::PosedSequence;
+use weft_body::query::MovingSurface;
+use weft_body::{BodyError, BodyModel, PosedSequence};
 use weft_mesh::export::{
     check_template, validate_fps, write_scene, AnimatedMesh, CornerUvs, ExportFormat, Frames,
     BODY_COLOR, GARMENT_COLOR,
@@ -186,10 +186,11 @@ pub fn check_animation(
     let topology = crate::metrics::GarmentTopology::new(garment)?;
     let (mut strain_sum, mut strain_count, mut strain_max) = (0.0, 0usize, 0.0f64);
     let (mut inside, mut checked, mut deepest, mut nonfinite) = (0usize, 0usize, 0.0f64, 0);
-    posed.for_each_surface(|t, surface| {
-        let Some(frame) = frames.get(t) else {
-            return Ok(());
-        };
+    // `posed` may run past the frames (a rollout that diverged): follow the body only
+    // as far as they go.
+    let mut body = MovingSurface::new(posed.faces());
+    for (frame, body_frame) in frames.iter().zip(posed.frames()) {
+        let surface = body.frame(body_frame).map_err(BodyError::from)?;
         for e in crate::metrics::edge_strains(&topology.edges, &topology.rest_lengths, frame)? {
             if e.is_finite() {
                 strain_sum += e;
@@ -210,8 +211,7 @@ pub fn check_animation(
                 deepest = deepest.max(-d);
             }
         }
-        Ok::<_, EvalError>(())
-    })?;
+    }
     Ok(AnimationCheck {
         frames: frames.len(),
         strain_mean: strain_sum / strain_count.max(1) as f64,

@@ -113,9 +113,7 @@ pub fn write_skinned_animation(
         .collect();
     let posed = PosedSequence::new(body, betas, &motion.poses()[..t], &motion.trans()[..t])
         .map_err(|e| invalid("posing the body", e))?;
-    let body_frames: Vec<Vec<[f32; 3]>> = (0..t)
-        .filter_map(|k| posed.frame(k).map(<[_]>::to_vec))
-        .collect();
+    let body_frames = posed.into_frames();
     let body_correctives = correctives(&body_influences, &body_frames, &transforms, &body_rest)?;
 
     // The garment: weights from the nearest body point.

@@ -294,9 +294,7 @@ impl BodyScene<'_> {
             &self.motion.poses()[..frames],
             &self.motion.trans()[..frames],
         )?;
-        Ok((0..frames)
-            .filter_map(|t| posed.frame(t).map(<[_]>::to_vec))
-            .collect())
+        Ok(posed.into_frames())
     }
 }
 

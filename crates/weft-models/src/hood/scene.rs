@@ -171,9 +171,7 @@ impl Scene {
         )?;
         let posed = weft_body::PosedSequence::new(body, clip.betas, clip.poses, clip.trans)
             .map_err(body_err("posing the body"))?;
-        let frames: Vec<Vec<[f64; 3]>> = (0..posed.len())
-            .map(|t| f64s(posed.frame(t).unwrap_or(&[])))
-            .collect();
+        let frames: Vec<Vec<[f64; 3]>> = posed.frames().map(f64s).collect();
         // A garment nowhere near the body (another frame or unit) would fall beside it.
         let rest_body = body
             .shape(&clip.betas.iter().map(|&b| f64::from(b)).collect::<Vec<_>>())

@@ -184,8 +184,7 @@ impl Pair {
             &s.trans[range],
         )?;
         let mut bodies: Vec<PosedBody> = Vec::with_capacity(posed.len());
-        for t in 0..posed.len() {
-            let frame = posed.frame(t).unwrap_or(&[]);
+        for frame in posed.frames() {
             let p: Vec<[f64; 3]> = frame.iter().map(|q| q.map(f64::from)).collect();
             let b = match bodies.last() {
                 Some(previous) => {
