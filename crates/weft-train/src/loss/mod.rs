@@ -4,7 +4,7 @@
 //!
 //! - [`supervised`]: vertex, edge and normal terms (eq. 1–3) as burn tensor code.
 //! - [`physics`]: collision, gravity, stretch and shear (eq. 4–8) as one custom autodiff
-//!   operation over weft-sim's energies; [`collision_energies`], [`gravity_energy`] and
+//!   operation over weft-sim's energies; [`collision_energies`] ([`collision_energy`] per frame), [`gravity_energy`] and
 //!   [`membrane_energies`] build those energies for a garment.
 
 pub mod physics;
@@ -28,12 +28,8 @@ pub use supervised::{
 };
 
 /// Eq. 4 for a window: one [`LinearCollision`] per frame, with the contacts of the
-/// predicted positions `x` (`T·N`, frame-major) against that frame's posed body.
-///
-/// The contacts are taken at the current prediction and held fixed through the
-/// backward pass (as the simulator refreshes them once per step): the hinge is then a
-/// plane per vertex, whose gradient is exact. `eps` is the threshold ε of eq. 4 (m);
-/// contacts farther than `radius` (m) from a vertex are ignored.
+/// predicted positions `x` (`T·N`, frame-major) against that frame's posed body
+/// ([`collision_energy`] per frame).
 pub fn collision_energies<P: BodyProximity + Sync>(
     bodies: &[P],
     x: &[[f64; 3]],
@@ -41,7 +37,6 @@ pub fn collision_energies<P: BodyProximity + Sync>(
     eps: f64,
     radius: f64,
 ) -> Result<FrameEnergies> {
-    use rayon::prelude::*;
     let want = bodies.len() * vertex_count;
     if x.len() != want {
         return Err(crate::TrainError::Shape {
@@ -50,28 +45,42 @@ pub fn collision_energies<P: BodyProximity + Sync>(
             found: x.len().to_string(),
         });
     }
-    let frames: Vec<Arc<dyn weft_sim::Energy + Send + Sync>> = bodies
-        .par_iter()
-        .zip(x.par_chunks(vertex_count.max(1)))
-        .map(|(body, xt)| {
-            let contacts: Vec<VertexContact> = xt
-                .iter()
-                .enumerate()
-                .filter_map(|(v, &p)| {
-                    let contact = body.closest(p)?;
-                    let d = contact.signed_distance(p);
-                    // Outside and beyond the radius: no contact can act this step.
-                    (d < radius).then_some(VertexContact {
-                        vertex: v as u32,
-                        contact,
-                    })
-                })
-                .collect();
-            let e = LinearCollision::new(vertex_count, eps, contacts)?;
-            Ok(Arc::new(e) as Arc<dyn weft_sim::Energy + Send + Sync>)
-        })
+    let frames = bodies
+        .iter()
+        .zip(x.chunks(vertex_count.max(1)))
+        .map(|(body, xt)| collision_energy(body, xt, eps, radius))
         .collect::<Result<_>>()?;
     FrameEnergies::per_frame(frames)
+}
+
+/// Eq. 4 for one frame: the contacts of the garment's vertices `x` against `body`, found
+/// in parallel.
+///
+/// The contacts are taken at the current prediction and held fixed through the
+/// backward pass (as the simulator refreshes them once per step): the hinge is then a
+/// plane per vertex, whose gradient is exact. `eps` is the threshold ε of eq. 4 (m);
+/// contacts farther than `radius` (m) from a vertex are ignored.
+pub fn collision_energy<P: BodyProximity + Sync>(
+    body: &P,
+    x: &[[f64; 3]],
+    eps: f64,
+    radius: f64,
+) -> Result<Arc<dyn weft_sim::Energy + Send + Sync>> {
+    use rayon::prelude::*;
+    let contacts: Vec<VertexContact> = x
+        .par_iter()
+        .enumerate()
+        .filter_map(|(v, &p)| {
+            let contact = body.closest(p)?;
+            let d = contact.signed_distance(p);
+            // Outside and beyond the radius: no contact can act this step.
+            (d < radius).then_some(VertexContact {
+                vertex: v as u32,
+                contact,
+            })
+        })
+        .collect();
+    Ok(Arc::new(LinearCollision::new(x.len(), eps, contacts)?))
 }
 
 /// Eq. 5 over `frames` frames: lumped masses of the rest garment at area density
