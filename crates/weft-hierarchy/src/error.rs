@@ -9,6 +9,10 @@ pub enum HierarchyError {
         /// The fine vertex that cannot be filled.
         vertex: usize,
     },
+    /// Given pooling centres must be one per connected component, in component order
+    /// (components numbered by their smallest vertex).
+    #[error("pooling centres: {0}")]
+    BadCenters(String),
     /// A hierarchy has at least its finest level.
     #[error("a hierarchy needs at least 1 level, got 0")]
     NoLevels,

@@ -4,7 +4,7 @@
 //! with its own edges).
 
 use crate::error::HierarchyError;
-use crate::pooling::pool;
+use crate::pooling::{pool, pool_from};
 use crate::unpooling::Unpooling;
 use weft_mesh::Graph;
 
@@ -35,6 +35,28 @@ impl Hierarchy {
     /// Pooling stops early, with fewer levels, once a level has one vertex per
     /// component: pooling it again would change nothing.
     pub fn build(fine: Graph, levels: usize) -> Result<Self, HierarchyError> {
+        Self::grow(fine, levels, None)
+    }
+
+    /// [`Hierarchy::build`] from given `centers` (one per component, as
+    /// [`pool_from`] takes them), carried down to every coarser level, where each stays a
+    /// vertex (it is at distance 0), as HOOD's code does: the levels differ with the
+    /// centre, which HOOD draws at random per training sample. [`Hierarchy::build`]
+    /// instead takes each level's own first minimum-eccentricity vertex (seed 000).
+    pub fn build_from_centers(
+        fine: Graph,
+        levels: usize,
+        centers: &[u32],
+    ) -> Result<Self, HierarchyError> {
+        Self::grow(fine, levels, Some(centers.to_vec()))
+    }
+
+    /// Pools until `levels` levels, around `carried` centres if given.
+    fn grow(
+        fine: Graph,
+        levels: usize,
+        mut carried: Option<Vec<u32>>,
+    ) -> Result<Self, HierarchyError> {
         if levels == 0 {
             return Err(HierarchyError::NoLevels);
         }
@@ -46,9 +68,19 @@ impl Hierarchy {
         }];
         while out.len() < levels {
             let finer = &out[out.len() - 1].graph;
-            let p = pool(finer);
+            let p = match &carried {
+                Some(centers) => pool_from(finer, centers)?,
+                None => pool(finer),
+            };
             if p.kept.len() == finer.vertex_count() {
                 break;
+            }
+            if let Some(centers) = carried.as_mut() {
+                for c in centers.iter_mut() {
+                    *c = p.kept.binary_search(c).map_err(|_| {
+                        HierarchyError::BadCenters(format!("centre {c} was not kept"))
+                    })? as u32;
+                }
             }
             let unpooling = Unpooling::new(finer, &p.kept)?;
             out.push(Level {
@@ -127,6 +159,34 @@ mod tests {
         for l in h.levels() {
             assert_eq!(l.graph.components().count, 1);
         }
+    }
+
+    #[test]
+    fn given_centres_stay_at_every_level_and_change_the_levels() {
+        let g = builtin_garment().graph();
+        let sets = weft_mesh::eccentricity::component_center_sets(&g);
+        assert_eq!(sets.len(), 1);
+        let first = Hierarchy::build_from_centers(g.clone(), 3, &[sets[0][0]]).unwrap();
+        // The first centre at level 0 is `build`'s; `build` re-centres each coarser
+        // level, so only level 1 must agree.
+        let default = Hierarchy::build(g.clone(), 3).unwrap();
+        assert_eq!(first.levels()[1], default.levels()[1]);
+        // A vertex far from the centre: every level keeps it, and the levels differ.
+        let far = 0u32;
+        let h = Hierarchy::build_from_centers(g.clone(), 3, &[far]).unwrap();
+        assert_eq!(h.len(), 3);
+        for l in 0..3 {
+            assert!(h.finest_indices(l).contains(&far), "level {l}");
+        }
+        assert_ne!(h.finest_indices(1), first.finest_indices(1));
+        // Still nested and connected.
+        let l2 = h.finest_indices(2);
+        let l1 = h.finest_indices(1);
+        assert!(l2.iter().all(|v| l1.binary_search(v).is_ok()));
+        for l in h.levels() {
+            assert_eq!(l.graph.components().count, 1);
+        }
+        assert!(Hierarchy::build_from_centers(g, 3, &[0, 1]).is_err());
     }
 
     #[test]

@@ -15,5 +15,5 @@ mod unpooling;
 
 pub use error::HierarchyError;
 pub use hierarchy::{Hierarchy, Level};
-pub use pooling::{pool, Pooling};
+pub use pooling::{pool, pool_from, Pooling};
 pub use unpooling::Unpooling;

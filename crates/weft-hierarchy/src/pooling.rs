@@ -9,10 +9,14 @@
 //! The seed pools a single connected garment graph. Garments often have several
 //! components (a shirt and its separate pocket), so each component gets its own center,
 //! chosen by the same rule: the first vertex by index among those of minimum
-//! eccentricity within the component.
+//! eccentricity within the component. [`pool_from`] takes the centres from the caller
+//! instead (HOOD draws one per training sample among the tied minimum-eccentricity
+//! vertices, as an augmentation).
 
 use weft_mesh::eccentricity::component_centers;
 use weft_mesh::{Graph, UNREACHED};
+
+use crate::error::HierarchyError;
 
 /// The result of pooling a fine graph into a coarse one.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -30,6 +34,43 @@ pub struct Pooling {
 /// Pools `fine` by Algorithm 1, one center per connected component.
 pub fn pool(fine: &Graph) -> Pooling {
     let centers: Vec<u32> = component_centers(fine).iter().map(|c| c.center).collect();
+    pool_around(fine, centers)
+}
+
+/// Pools `fine` by Algorithm 1 from the given `centers`: one vertex per connected
+/// component, in component order (components numbered by their smallest vertex, as
+/// [`weft_mesh::eccentricity::component_center_sets`] lists them). Any vertex will do,
+/// but the rule's minimum-eccentricity vertices keep the coarse graph shallowest.
+pub fn pool_from(fine: &Graph, centers: &[u32]) -> Result<Pooling, HierarchyError> {
+    let components = fine.components();
+    if centers.len() != components.count {
+        return Err(HierarchyError::BadCenters(format!(
+            "expected one per connected component ({}), got {}",
+            components.count,
+            centers.len()
+        )));
+    }
+    for (k, &c) in centers.iter().enumerate() {
+        match components.label.get(c as usize) {
+            None => {
+                return Err(HierarchyError::BadCenters(format!(
+                    "centre {k} is vertex {c}, but the graph has {} vertices",
+                    fine.vertex_count()
+                )))
+            }
+            Some(&label) if label as usize != k => {
+                return Err(HierarchyError::BadCenters(format!(
+                    "centre {k} (vertex {c}) lies in component {label}, not {k}"
+                )))
+            }
+            Some(_) => {}
+        }
+    }
+    Ok(pool_around(fine, centers.to_vec()))
+}
+
+/// Algorithm 1 around valid centres.
+fn pool_around(fine: &Graph, centers: Vec<u32>) -> Pooling {
     let distance = multi_source_bfs(fine, &centers);
     let n = fine.vertex_count();
     let mut coarse_index = vec![u32::MAX; n];
@@ -106,6 +147,24 @@ pub(crate) fn multi_source_bfs(graph: &Graph, sources: &[u32]) -> Vec<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn given_centres_move_the_parity_and_are_checked() {
+        // 0-1-2-3-4 from centre 1: kept 1 and 3, joined across 2; 0 and 4 are odd.
+        let g = Graph::from_edges(5, &[[0, 1], [1, 2], [2, 3], [3, 4]]);
+        let p = pool_from(&g, &[1]).unwrap();
+        assert_eq!(p.kept, vec![1, 3]);
+        assert_eq!(p.coarse.edges(), vec![[0, 1]]);
+        // The default centre through the same path gives `pool`'s result.
+        assert_eq!(pool_from(&g, &[2]).unwrap(), pool(&g));
+        // Two components (0-1, 2-3-4): one centre each, in component order.
+        let g = Graph::from_edges(5, &[[0, 1], [2, 3], [3, 4]]);
+        assert!(pool_from(&g, &[0, 3]).is_ok());
+        for bad in [&[0][..], &[3, 0], &[0, 9], &[0, 1, 3]] {
+            let e = pool_from(&g, bad).unwrap_err();
+            assert!(matches!(e, HierarchyError::BadCenters(_)), "{bad:?}: {e}");
+        }
+    }
 
     #[test]
     fn path_keeps_every_other_vertex_and_bridges_the_gaps() {

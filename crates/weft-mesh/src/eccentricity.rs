@@ -47,6 +47,40 @@ pub fn component_centers(graph: &Graph) -> Vec<ComponentCenter> {
         .collect()
 }
 
+/// Every vertex of minimum eccentricity of each component, ascending, in the order of
+/// [`Graph::components`]: the centres HOOD draws from, one per training sample, as an
+/// augmentation of its hierarchy (seed 004 code, `nx.center`). The first of each list is
+/// [`component_centers`]' centre. Tied candidates each need their own search to be
+/// confirmed, so a graph with a ring of centres (an open cylinder) costs a search per
+/// ring vertex.
+pub fn component_center_sets(graph: &Graph) -> Vec<Vec<u32>> {
+    let components = graph.components();
+    let mut bounds = Bounds::new(graph.vertex_count());
+    components
+        .members()
+        .iter()
+        .map(|members| {
+            let r = bounds.center(graph, members).radius;
+            // Every lower bound is now at least r: the centres are the vertices whose
+            // eccentricity is exactly r, confirmed by their own search where the bounds
+            // do not already meet.
+            members
+                .iter()
+                .copied()
+                .filter(|&w| {
+                    if bounds.lo[w as usize] != r {
+                        return false;
+                    }
+                    if !bounds.resolved(w) {
+                        bounds.search(graph, w);
+                    }
+                    bounds.hi[w as usize] == r
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// Eccentricity of every vertex by one BFS per vertex: O(n·m). The reference the bounded
 /// search is tested against; fine for meshes of a few thousand vertices.
 pub fn eccentricities_brute_force(graph: &Graph) -> Vec<u32> {
@@ -155,7 +189,8 @@ mod tests {
     use crate::primitives::{cylinder, grid};
     use proptest::prelude::*;
 
-    fn brute_centers(graph: &Graph) -> Vec<(u32, u32)> {
+    /// Every minimum-eccentricity vertex of each component and the radius, by brute force.
+    fn brute_center_sets_and_radii(graph: &Graph) -> Vec<(Vec<u32>, u32)> {
         let ecc = eccentricities_brute_force(graph);
         graph
             .components()
@@ -163,9 +198,23 @@ mod tests {
             .iter()
             .map(|m| {
                 let r = m.iter().map(|&w| ecc[w as usize]).min().unwrap();
-                let c = *m.iter().find(|&&w| ecc[w as usize] == r).unwrap();
-                (c, r)
+                let set = m.iter().copied().filter(|&w| ecc[w as usize] == r);
+                (set.collect(), r)
             })
+            .collect()
+    }
+
+    fn brute_centers(graph: &Graph) -> Vec<(u32, u32)> {
+        brute_center_sets_and_radii(graph)
+            .into_iter()
+            .map(|(set, r)| (set[0], r))
+            .collect()
+    }
+
+    fn brute_center_sets(graph: &Graph) -> Vec<Vec<u32>> {
+        brute_center_sets_and_radii(graph)
+            .into_iter()
+            .map(|(set, _)| set)
             .collect()
     }
 
@@ -181,9 +230,11 @@ mod tests {
         let edges: Vec<[u32; 2]> = (0..6).map(|i| [i, i + 1]).collect();
         let g = Graph::from_edges(7, &edges);
         assert_eq!(fast_centers(&g), vec![(3, 3)]);
-        // Even path: two centers, the first by index wins.
+        assert_eq!(component_center_sets(&g), vec![vec![3]]);
+        // Even path: two centers, the first by index wins; both are in the set.
         let g = Graph::from_edges(6, &edges[..5]);
         assert_eq!(fast_centers(&g), vec![(2, 3)]);
+        assert_eq!(component_center_sets(&g), vec![vec![2, 3]]);
     }
 
     #[test]
@@ -202,6 +253,12 @@ mod tests {
         ] {
             let g = m.graph();
             assert_eq!(fast_centers(&g), brute_centers(&g));
+            let sets = component_center_sets(&g);
+            assert_eq!(sets, brute_center_sets(&g));
+            // The first of each set is the centre pooling uses.
+            let firsts: Vec<u32> = sets.iter().map(|s| s[0]).collect();
+            let centers: Vec<u32> = fast_centers(&g).iter().map(|c| c.0).collect();
+            assert_eq!(firsts, centers);
         }
     }
 
@@ -238,6 +295,7 @@ mod tests {
         fn centers_match_brute_force_on_random_meshes(m in random_mesh()) {
             let g = m.graph();
             prop_assert_eq!(fast_centers(&g), brute_centers(&g));
+            prop_assert_eq!(component_center_sets(&g), brute_center_sets(&g));
         }
 
         #[test]
@@ -252,6 +310,7 @@ mod tests {
                 .collect();
             let g = Graph::from_edges(n, &edges);
             prop_assert_eq!(fast_centers(&g), brute_centers(&g));
+            prop_assert_eq!(component_center_sets(&g), brute_center_sets(&g));
         }
     }
 }

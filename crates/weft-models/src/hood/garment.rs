@@ -69,13 +69,7 @@ impl HoodGarment {
         }
         let hierarchy = Hierarchy::build(rest.graph(), levels.max(1))
             .map_err(|e| ModelError::Garment(format!("garment hierarchy: {e}")))?;
-        let both = |edges: Vec<[u32; 2]>| -> Vec<[u32; 2]> {
-            edges.iter().flat_map(|&[a, b]| [[a, b], [b, a]]).collect()
-        };
-        let built = hierarchy.len();
-        let level_edges: Vec<Vec<[u32; 2]>> = (0..levels.max(1))
-            .map(|l| both(hierarchy.edges_in_finest(l.min(built - 1))))
-            .collect();
+        let (level_edges, level_of) = nested_levels(&hierarchy, levels.max(1));
         let mut flags = vec![false; n];
         for &v in pinned {
             flags[v as usize] = true;
@@ -83,12 +77,25 @@ impl HoodGarment {
         Ok(HoodGarment {
             rest: rest.clone(),
             levels: level_edges,
-            level_of: hierarchy.coarsest_level(),
+            level_of,
             pinned: flags,
             masses,
             material,
             buttons: Vec::new(),
         })
+    }
+
+    /// The same garment with its hierarchy pooled around `centers` (one vertex per
+    /// connected component, in component order; [`Hierarchy::build_from_centers`]):
+    /// HOOD's augmentation, a centre drawn per training sample among each component's
+    /// minimum-eccentricity vertices
+    /// ([`weft_mesh::eccentricity::component_center_sets`]).
+    pub fn recentred(mut self, centers: &[u32]) -> Result<Self, ModelError> {
+        let levels = self.levels.len();
+        let hierarchy = Hierarchy::build_from_centers(self.rest.graph(), levels, centers)
+            .map_err(|e| ModelError::Garment(format!("garment hierarchy: {e}")))?;
+        (self.levels, self.level_of) = nested_levels(&hierarchy, levels);
+        Ok(self)
     }
 
     /// Garment vertices.
@@ -110,6 +117,20 @@ impl HoodGarment {
         self.buttons = pairs.iter().flat_map(|&[a, b]| [[a, b], [b, a]]).collect();
         Ok(self)
     }
+}
+
+/// The directed edges (both directions, level-0 numbering) of `levels` levels of
+/// `hierarchy`, its coarsest repeated where it has fewer, and each vertex's coarsest
+/// level.
+fn nested_levels(hierarchy: &Hierarchy, levels: usize) -> (Vec<Vec<[u32; 2]>>, Vec<u8>) {
+    let both = |edges: Vec<[u32; 2]>| -> Vec<[u32; 2]> {
+        edges.iter().flat_map(|&[a, b]| [[a, b], [b, a]]).collect()
+    };
+    let built = hierarchy.len();
+    let edges = (0..levels)
+        .map(|l| both(hierarchy.edges_in_finest(l.min(built - 1))))
+        .collect();
+    (edges, hierarchy.coarsest_level())
 }
 
 #[cfg(test)]
@@ -145,5 +166,27 @@ mod tests {
         assert_eq!(b.buttons, vec![[1, 70], [70, 1]]);
         assert!(h.clone().with_buttons(&[[1, 1]]).is_err());
         assert!(h.with_buttons(&[[1, n as u32]]).is_err());
+    }
+
+    #[test]
+    fn recentring_moves_the_levels_and_keeps_the_rest() {
+        let g = grid(9, 9, 0.05);
+        let n = g.vertex_count();
+        let h = HoodGarment::new(&g, 3, &[0, 8], vec![0.01; n], vec![[0.5; 3]; n]).unwrap();
+        let centres = weft_mesh::eccentricity::component_center_sets(&g.graph());
+        // Around the default centre the fine and first coarse levels are unchanged.
+        let same = h.clone().recentred(&[centres[0][0]]).unwrap();
+        assert_eq!(same.levels[..2], h.levels[..2]);
+        // Around a corner, the corner is a node of every level and level 1 changes.
+        let corner = h.clone().recentred(&[80]).unwrap();
+        assert_eq!(corner.levels.len(), 3);
+        assert_eq!(corner.level_of[80], 2);
+        assert_ne!(corner.levels[1], h.levels[1]);
+        assert_eq!(corner.levels[0], h.levels[0]);
+        assert_eq!(
+            (corner.pinned, corner.masses),
+            (h.pinned.clone(), h.masses.clone())
+        );
+        assert!(h.recentred(&[0, 1]).is_err());
     }
 }

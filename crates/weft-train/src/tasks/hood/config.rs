@@ -59,6 +59,10 @@ pub struct HoodTraining {
     /// Share of samples whose garment is made of two materials, split by a random plane
     /// (HOOD's training never sees heterogeneous materials; run-time maps need it).
     pub two_materials: f64,
+    /// Pool each sample's hierarchy around a centre drawn among each garment component's
+    /// minimum-eccentricity vertices (HOOD's code; its augmentation of the levels), not
+    /// always the first of them as inference does.
+    pub random_centres: bool,
     /// Weight of the distance to weft-sim's implicit step from the same state (cm²). 0
     /// is HOOD: the potential alone. The potential is badly conditioned (stretching is
     /// hundreds of times stiffer than inertia), so its gradient teaches the network the
@@ -115,6 +119,7 @@ impl HoodTraining {
             collision_start: 0.01,
             collision_ramp: [0.33, 0.66],
             two_materials: 0.25,
+            random_centres: true,
             solver_weight: 0.0,
             validation_scenes: 4,
             validation_frames: 60,

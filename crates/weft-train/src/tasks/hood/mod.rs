@@ -35,6 +35,7 @@ use std::sync::Arc;
 use burn::tensor::{Device, Tensor};
 use weft_body::{BodyModel, Pose};
 use weft_garment::{FitBody, GarmentKind, Style};
+use weft_mesh::eccentricity::component_center_sets;
 use weft_mesh::rng::SplitMix64;
 use weft_mesh::TriMesh;
 use weft_models::hood::rollout::{host_positions, next_positions};
@@ -139,6 +140,8 @@ impl Default for Stage {
 struct PoolGarment {
     mesh: TriMesh,
     betas: Vec<f32>,
+    /// Each component's minimum-eccentricity vertices (the centres a sample draws from).
+    centres: Vec<Vec<u32>>,
 }
 
 /// A motion of the pool.
@@ -161,6 +164,9 @@ struct Sample {
     /// settling step first when `[model] settle_dt` > 0).
     at_rest: bool,
     noise_seed: u64,
+    /// The hierarchy's centre in each garment component (`[train] random_centres`);
+    /// none: the first minimum-eccentricity vertex, as inference takes it.
+    centres: Option<Vec<u32>>,
 }
 
 impl Sample {
@@ -245,8 +251,10 @@ fn garment_pool(
     for betas in shapes {
         for name in &training.garments {
             for s in 0..training.styles {
+                let mesh = garment_on(training, body, betas, name, seed.wrapping_add(s as u64))?;
                 out.push(PoolGarment {
-                    mesh: garment_on(training, body, betas, name, seed.wrapping_add(s as u64))?,
+                    centres: component_center_sets(&mesh.graph()),
+                    mesh,
                     betas: betas.clone(),
                 });
             }
@@ -424,42 +432,49 @@ impl HoodTask {
             Materials::Uniform(a)
         };
         let at_rest = rollout > 1 || rng.unit() < self.training.settle_probability;
+        let noise_seed = rng.next_u64();
+        let centres = self.training.random_centres.then(|| {
+            self.garments[garment]
+                .centres
+                .iter()
+                .map(|set| set[rng.below(set.len())])
+                .collect()
+        });
         Sample {
             garment,
             motion,
             first,
             materials,
             at_rest,
-            noise_seed: rng.next_u64(),
+            noise_seed,
+            centres,
         }
     }
 
-    /// The scene of a window of `frames` frames of a pool motion from `first`.
-    fn scene(
-        &self,
-        garment: usize,
-        motion: usize,
-        first: usize,
-        frames: usize,
-        materials: &Materials,
-    ) -> Result<Scene> {
-        let g = &self.garments[garment];
-        let m = &self.motions[motion];
-        let end = (first + frames).min(m.poses.len());
+    /// The scene of sample `s`: a window of `frames` frames of its pool motion from its
+    /// first frame, the garment's hierarchy around the sample's centres.
+    fn scene(&self, s: &Sample, frames: usize) -> Result<Scene> {
+        let g = &self.garments[s.garment];
+        let m = &self.motions[s.motion];
+        let end = (s.first + frames).min(m.poses.len());
         let clip = Clip {
             betas: &g.betas,
-            poses: &m.poses[first..end],
-            trans: &m.trans[first..end],
+            poses: &m.poses[s.first..end],
+            trans: &m.trans[s.first..end],
             fps: m.fps,
         };
-        Ok(Scene::new(
+        let mut scene = Scene::new(
             &g.mesh,
             &self.body,
             &clip,
-            materials,
+            &s.materials,
             Attachment::TopOpening,
             &self.config,
-        )?)
+        )?;
+        if let Some(centres) = &s.centres {
+            scene.garment = scene.garment.recentred(centres)?;
+        }
+        Ok(scene)
     }
 
     /// Held-out scenes: new shapes (drawn after the training ones), every motion in turn
@@ -510,7 +525,7 @@ impl HoodTask {
         let mut fit = HoodStatsFit::new(self.config.levels)?;
         for item in 0..STATS_SAMPLES {
             let s = self.sample(item, 1);
-            let scene = self.scene(s.garment, s.motion, s.first, 3, &s.materials)?;
+            let scene = self.scene(&s, 3)?;
             let start = scene.start(1, s.at_rest)?;
             let settle = s.settles(0, &self.config);
             let at = StepAt {
@@ -593,7 +608,7 @@ impl TrainTask for HoodTask {
     fn losses(&mut self, model: &Hood, item: usize, terms: &[Term]) -> Result<Vec<Tensor<1>>> {
         let rollout = self.stage.rollout;
         let s = self.sample(item, rollout);
-        let scene = self.scene(s.garment, s.motion, s.first, rollout + 2, &s.materials)?;
+        let scene = self.scene(&s, rollout + 2)?;
         let start = scene.start(1, s.at_rest)?;
         let (mut prev, mut cur) = (start.prev, start.cur);
         // Position noise on the free vertices, the same offset at t − 1 and t.
@@ -773,4 +788,83 @@ impl TrainTask for HoodTask {
 /// Saves the normalisers as `dir/hood.json` (atomically).
 pub fn save_stats(dir: &Path, stats: &HoodStats) -> Result<()> {
     crate::run::save_json(dir, STATS_FILE, stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use weft_models::hood::features::StepGraph;
+
+    /// One 300-vertex skirt on one body, a short walk.
+    fn task(random_centres: bool) -> HoodTask {
+        let training = HoodTraining {
+            garments: vec!["skirt".into()],
+            styles: 1,
+            shapes: 1,
+            garment_vertices: 300,
+            motions: vec!["walk".into()],
+            motion_frames: 12,
+            max_rollout: 2,
+            validation_scenes: 1,
+            validation_frames: 5,
+            random_centres,
+            ..HoodTraining::cpu()
+        };
+        let config = HoodConfig {
+            levels: 3,
+            ..HoodConfig::preset("cpu").unwrap()
+        };
+        // Pass-through normalisers: fitting them takes implicit steps this test does not
+        // need.
+        let identity = |width: usize| weft_nn::FeatureNormalizer {
+            mean: vec![0.0; width],
+            std: vec![1.0; width],
+        };
+        let stats = HoodStats {
+            node: identity(StepGraph::node_width(config.levels)),
+            mesh: identity(StepGraph::MESH_WIDTH),
+            body: identity(StepGraph::BODY_WIDTH),
+            output: identity(3),
+        };
+        let body = weft_body::default_body().unwrap();
+        HoodTask::new(
+            &config,
+            &training,
+            body,
+            Some(stats),
+            7,
+            &weft_nn::backend::cpu(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn samples_draw_their_hierarchy_centres_among_the_tied_ones() {
+        let t = task(true);
+        let sets = &t.garments[0].centres;
+        assert_eq!(sets.len(), 1, "the skirt is one piece");
+        assert!(sets[0].len() > 1, "a tube has tied centres: {:?}", sets[0]);
+        let mut seen = std::collections::BTreeSet::new();
+        let mut level_sets = std::collections::BTreeSet::new();
+        for item in 0..12 {
+            let s = t.sample(item, 1);
+            let c = s.centres.clone().unwrap();
+            assert_eq!(c.len(), 1);
+            assert!(sets[0].contains(&c[0]));
+            // The sample's scene pools around it: it is a node of every level.
+            let scene = t.scene(&s, 3).unwrap();
+            assert_eq!(scene.garment.level_of[c[0] as usize], 2);
+            seen.insert(c[0]);
+            level_sets.insert(scene.garment.levels[1].clone());
+        }
+        assert!(seen.len() > 1 && level_sets.len() > 1, "{seen:?}");
+        // Off, every sample keeps inference's hierarchy.
+        let t = task(false);
+        let s = t.sample(0, 1);
+        assert!(s.centres.is_none());
+        let default = t.scene(&s, 3).unwrap().garment;
+        let c = component_center_sets(&t.garments[0].mesh.graph());
+        let first = default.clone().recentred(&[c[0][0]]).unwrap();
+        assert_eq!(default.levels[..2], first.levels[..2]);
+    }
 }
