@@ -30,6 +30,9 @@ use crate::{skirt, BenchError, Row};
 pub struct HoodBench {
     /// Model preset: cpu or paper.
     pub preset: String,
+    /// A message-passing schedule in place of the preset's (`"0 x15"`: Fine15; the
+    /// format of [`HoodConfig::schedule`]).
+    pub schedule: Option<String>,
     /// Vertices of the garment.
     pub vertices: usize,
     /// Garments advanced in one forward pass.
@@ -45,6 +48,11 @@ pub struct HoodFigures {
     pub bench: &'static str,
     /// The preset.
     pub preset: String,
+    /// The message-passing schedule.
+    pub schedule: String,
+    /// How many mesh hops a vertex's information travels in one step through the
+    /// schedule (seed 004 Table 1).
+    pub propagation_radius: usize,
     /// Vertices of one garment.
     pub vertices: usize,
     /// Garments per forward pass.
@@ -75,6 +83,9 @@ impl Row for HoodFigures {
     fn cells(&self) -> Vec<(&'static str, String)> {
         vec![
             ("preset", self.preset.clone()),
+            // The schedule's `|` would split a Markdown cell.
+            ("schedule", self.schedule.replace('|', "\\|")),
+            ("radius", self.propagation_radius.to_string()),
             ("N", self.vertices.to_string()),
             ("batch", self.batch.to_string()),
             ("params", self.parameters.to_string()),
@@ -109,8 +120,15 @@ impl HoodBench {
         body: &BodyModel,
         progress: &mut dyn FnMut(&str),
     ) -> Result<HoodFigures, BenchError> {
-        let cfg = HoodConfig::preset(&self.preset).map_err(|e| BenchError::Option {
+        let mut cfg = HoodConfig::preset(&self.preset).map_err(|e| BenchError::Option {
             what: "--preset",
+            message: e.to_string(),
+        })?;
+        if let Some(schedule) = &self.schedule {
+            cfg.schedule = schedule.clone();
+        }
+        let propagation_radius = cfg.propagation_radius().map_err(|e| BenchError::Option {
+            what: "--schedule",
             message: e.to_string(),
         })?;
         if self.batch == 0 {
@@ -188,6 +206,8 @@ impl HoodBench {
         Ok(HoodFigures {
             bench: "hood",
             preset: self.preset.clone(),
+            schedule: cfg.schedule.clone(),
+            propagation_radius,
             vertices: mesh.vertex_count(),
             batch: self.batch,
             threads: rayon::current_num_threads(),

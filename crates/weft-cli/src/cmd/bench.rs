@@ -147,6 +147,10 @@ pub struct HoodArgs {
     /// Model preset: cpu or paper.
     #[arg(long, default_value = "paper")]
     preset: String,
+    /// Message-passing schedule in place of the preset's, as `[model] schedule` writes
+    /// it: "0 x15" is Fine15, "0 x48" Fine48 (seed 004 Table 1).
+    #[arg(long, value_name = "STEPS")]
+    schedule: Option<String>,
     /// Vertices of the skirt (several: 4000,12000).
     #[arg(long, value_delimiter = ',', default_value = "4000")]
     vertices: Vec<usize>,
@@ -307,6 +311,7 @@ fn hood(args: &HoodArgs) -> Result<()> {
         for &batch in &args.batch {
             let bench = HoodBench {
                 preset: args.preset.clone(),
+                schedule: args.schedule.clone(),
                 vertices,
                 batch,
                 reps: args.reps as usize,
