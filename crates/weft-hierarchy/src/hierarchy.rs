@@ -81,6 +81,10 @@ impl Hierarchy {
                         HierarchyError::BadCenters(format!("centre {c} was not kept"))
                     })? as u32;
                 }
+                // Coarse components are numbered by their smallest kept vertex, which
+                // can order them differently from the fine ones.
+                let label = p.coarse.components().label;
+                centers.sort_by_key(|&c| label[c as usize]);
             }
             let unpooling = Unpooling::new(finer, &p.kept)?;
             out.push(Level {
@@ -187,6 +191,39 @@ mod tests {
             assert_eq!(l.graph.components().count, 1);
         }
         assert!(Hierarchy::build_from_centers(g, 3, &[0, 1]).is_err());
+    }
+
+    #[test]
+    fn carried_centres_follow_the_coarse_component_order() {
+        // Two paths: A = 0-3-4-7-8 (smallest vertex 0) and B = 1-2-5-6-9 (smallest 1).
+        // Around 4 and 1, A keeps 0, 4, 8 and B keeps 1, 5, 9: A still comes first.
+        // Around 3 and 1, A keeps 3 and 7 and B keeps 1, 5, 9: on the coarse level B
+        // (from fine 1) precedes A (from fine 3), and the carried centres must follow.
+        let g = Graph::from_edges(
+            10,
+            &[
+                [0, 3],
+                [3, 4],
+                [4, 7],
+                [7, 8],
+                [1, 2],
+                [2, 5],
+                [5, 6],
+                [6, 9],
+            ],
+        );
+        for centres in [[4, 1], [3, 1]] {
+            let h = Hierarchy::build_from_centers(g.clone(), 3, &centres).unwrap();
+            assert_eq!(h.len(), 3, "{centres:?}");
+            for (l, level) in h.levels().iter().enumerate().skip(1) {
+                // Each centre is a node of every level.
+                let fine = h.finest_indices(l);
+                for c in centres {
+                    assert!(fine.contains(&c), "{centres:?}, level {l}");
+                }
+                assert_eq!(level.graph.components().count, 2);
+            }
+        }
     }
 
     #[test]
