@@ -182,7 +182,7 @@ impl EvalReport {
     pub fn fps_table(&self) -> (Vec<String>, Vec<Vec<String>>) {
         let header = [
             "method",
-            "batch (frames per pass)",
+            "batch (per pass: frames; HOOD: garments)",
             "vertices",
             "network fps",
             "with inputs fps",

@@ -91,7 +91,7 @@ pub type Frames = Vec<Vec<[f32; 3]>>;
 /// Inference speed at one batch size (frames per forward pass).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Timing {
-    /// Frames per forward pass.
+    /// Frames per forward pass (HOOD: garments per pass, one frame each).
     pub batch: usize,
     /// Garment vertices.
     pub vertices: usize,

@@ -21,6 +21,8 @@ pub mod predictor;
 pub mod rollout;
 pub mod scene;
 pub mod stats;
+#[cfg(test)]
+pub(crate) mod testutil;
 
 pub use config::HoodConfig;
 pub use garment::HoodGarment;

@@ -15,7 +15,7 @@ use super::model::Hood;
 use super::rollout::{roll_out, Rollout, RolloutOptions};
 use super::scene::{Materials, Scene};
 use super::stats::{HoodStats, STATS_FILE};
-use crate::deformer::{Clip, Deformer, Frames};
+use crate::deformer::{Clip, Deformer, Frames, Timing};
 use crate::error::ModelError;
 use crate::kind::ModelKind;
 use crate::refine::predictor::load_record;
@@ -167,5 +167,109 @@ impl Deformer for HoodPredictor {
             .into_iter()
             .map(|f| f.into_iter().map(|p| p.map(|x| x as f32)).collect())
             .collect())
+    }
+
+    /// Garment frames per second with `batch` copies of the garment advanced in one
+    /// forward pass per frame (HOOD's batch: garments, not frames), over the first
+    /// `frames` frames of `clip`, after one untimed rollout. The rollout is timed whole
+    /// (step graphs, network, integration), so both rates are the same figure: the
+    /// network alone is `weft bench hood`'s.
+    fn time(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+        batches: &[usize],
+        frames: usize,
+    ) -> Result<Option<Vec<Timing>>, ModelError> {
+        let end = (frames + 1).clamp(2, clip.len().max(2));
+        let cut = Clip {
+            poses: &clip.poses[..end.min(clip.poses.len())],
+            trans: &clip.trans[..end.min(clip.trans.len())],
+            ..*clip
+        };
+        let scene = self.scene(garment, body, &cut)?;
+        self.roll_out(&[&scene])?;
+        let mut out = Vec::with_capacity(batches.len());
+        for &batch in batches {
+            let batch = batch.max(1);
+            let scenes = vec![&scene; batch];
+            let t0 = std::time::Instant::now();
+            let rollouts = self.roll_out(&scenes)?;
+            let seconds = t0.elapsed().as_secs_f64().max(1e-12);
+            let reached: usize = rollouts.iter().map(|r| r.frames.len()).sum();
+            let fps = reached as f64 / seconds;
+            out.push(Timing {
+                batch,
+                vertices: garment.vertex_count(),
+                network_fps: fps,
+                end_to_end_fps: fps,
+                frames: reached,
+            });
+        }
+        Ok(Some(out))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hood::features::StepGraph;
+    use weft_nn::FeatureNormalizer;
+
+    /// An untrained cpu-preset network with pass-through normalisers: timing does not
+    /// depend on the weights.
+    fn predictor() -> HoodPredictor {
+        let config = HoodConfig::preset("cpu").unwrap();
+        let device = weft_nn::backend::cpu();
+        let identity = |w: usize| FeatureNormalizer {
+            mean: vec![0.0; w],
+            std: vec![1.0; w],
+        };
+        HoodPredictor {
+            model: config.init(&device).unwrap(),
+            stats: HoodStats {
+                node: identity(StepGraph::node_width(config.levels)),
+                mesh: identity(StepGraph::MESH_WIDTH),
+                body: identity(StepGraph::BODY_WIDTH),
+                output: identity(3),
+            },
+            config,
+            materials: Materials::Uniform(Material::hood()),
+            buttons: Vec::new(),
+            attachment: Attachment::TopOpening,
+            options: RolloutOptions::default(),
+            device,
+            checkpoint: PathBuf::from("untrained"),
+        }
+    }
+
+    #[test]
+    fn timing_advances_a_batch_of_garments_per_pass() {
+        let (body, skirt) = crate::hood::testutil::body_and_skirt(320);
+        let (poses, trans) = crate::hood::testutil::still(6);
+        let clip = Clip {
+            betas: &[],
+            poses: &poses,
+            trans: &trans,
+            fps: 30.0,
+        };
+        let p = predictor();
+        let t = p.time(&skirt, &body, &clip, &[1, 3], 3).unwrap().unwrap();
+        assert_eq!(t.iter().map(|x| x.batch).collect::<Vec<_>>(), vec![1, 3]);
+        // The first 3 frames after the start (4 of the clip), every garment of the batch.
+        assert_eq!(t[0].frames, 4);
+        assert_eq!(t[1].frames, 12);
+        for x in &t {
+            assert_eq!(x.vertices, skirt.vertex_count());
+            assert!(x.network_fps > 0.0 && x.network_fps == x.end_to_end_fps);
+        }
+        // A one-frame clip cannot be rolled out: an error, not a figure.
+        let one = Clip {
+            poses: &poses[..1],
+            trans: &trans[..1],
+            ..clip
+        };
+        assert!(p.time(&skirt, &body, &one, &[1], 3).is_err());
     }
 }

@@ -330,19 +330,11 @@ fn hand_vertices(body: &BodyModel) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use weft_body::BodyModel;
 
     #[test]
     fn scenes_refuse_a_garment_off_the_body_and_a_bad_material_map() {
-        let body = BodyModel::load_or_default(None).unwrap();
-        let fit = weft_garment::FitBody::new(&body, &[]).unwrap();
-        let kind = weft_garment::GarmentKind::Skirt;
-        let skirt = fit
-            .generate(kind, &weft_garment::Style::from_seed(kind, 1), 320)
-            .unwrap()
-            .mesh;
-        let poses = vec![[[0.0f32; 3]; 24]; 3];
-        let trans = vec![[0.0f32; 3]; 3];
+        let (body, skirt) = crate::hood::testutil::body_and_skirt(320);
+        let (poses, trans) = crate::hood::testutil::still(3);
         let clip = Clip {
             betas: &[],
             poses: &poses,
