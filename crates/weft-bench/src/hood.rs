@@ -19,7 +19,6 @@ use weft_models::hood::{HoodConfig, HoodInput, HoodStats, Materials, Scene, Step
 use weft_models::Clip;
 use weft_motion::{generate, MotionKind, ProceduralParams};
 use weft_nn::backend::cpu;
-use weft_nn::FeatureNormalizer;
 use weft_sim::{Attachment, Material};
 
 use crate::timing::try_median_ms;
@@ -99,20 +98,6 @@ impl Row for HoodFigures {
     }
 }
 
-/// Normalisers that change nothing: the cost does not depend on the statistics.
-fn identity(levels: usize) -> HoodStats {
-    let n = |w: usize| FeatureNormalizer {
-        mean: vec![0.0; w],
-        std: vec![1.0; w],
-    };
-    HoodStats {
-        node: n(StepGraph::node_width(levels)),
-        mesh: n(StepGraph::MESH_WIDTH),
-        body: n(StepGraph::BODY_WIDTH),
-        output: n(3),
-    }
-}
-
 impl HoodBench {
     /// Runs the bench on the skirt fitted to `body`, walking.
     pub fn run(
@@ -174,7 +159,7 @@ impl HoodBench {
         let refs: Vec<&StepGraph> = built.iter().map(|(g, _)| g).collect();
         let advances: Vec<&Advance> = built.iter().map(|(_, a)| a).collect();
         let device = cpu();
-        let stats = identity(cfg.levels);
+        let stats = HoodStats::identity(cfg.levels);
         let model = cfg
             .init(&device)
             .map_err(BenchError::stage("the network"))?;

@@ -182,10 +182,13 @@ impl Deformer for HoodPredictor {
         batches: &[usize],
         frames: usize,
     ) -> Result<Option<Vec<Timing>>, ModelError> {
-        let end = (frames + 1).clamp(2, clip.len().max(2));
+        clip.check()?;
+        // The start frame and `frames` steps; a clip too short for a step is refused by
+        // the scene.
+        let end = (frames + 1).max(2).min(clip.len());
         let cut = Clip {
-            poses: &clip.poses[..end.min(clip.poses.len())],
-            trans: &clip.trans[..end.min(clip.trans.len())],
+            poses: &clip.poses[..end],
+            trans: &clip.trans[..end],
             ..*clip
         };
         let scene = self.scene(garment, body, &cut)?;
@@ -214,26 +217,15 @@ impl Deformer for HoodPredictor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hood::features::StepGraph;
-    use weft_nn::FeatureNormalizer;
 
     /// An untrained cpu-preset network with pass-through normalisers: timing does not
     /// depend on the weights.
     fn predictor() -> HoodPredictor {
         let config = HoodConfig::preset("cpu").unwrap();
         let device = weft_nn::backend::cpu();
-        let identity = |w: usize| FeatureNormalizer {
-            mean: vec![0.0; w],
-            std: vec![1.0; w],
-        };
         HoodPredictor {
             model: config.init(&device).unwrap(),
-            stats: HoodStats {
-                node: identity(StepGraph::node_width(config.levels)),
-                mesh: identity(StepGraph::MESH_WIDTH),
-                body: identity(StepGraph::BODY_WIDTH),
-                output: identity(3),
-            },
+            stats: HoodStats::identity(config.levels),
             config,
             materials: Materials::Uniform(Material::hood()),
             buttons: Vec::new(),

@@ -107,6 +107,21 @@ impl HoodStatsFit {
 }
 
 impl HoodStats {
+    /// Normalisers that change nothing, for a hierarchy of `levels` levels: where only
+    /// the cost of a step matters (benchmarks, timing, tests), not its statistics.
+    pub fn identity(levels: usize) -> Self {
+        let n = |w: usize| FeatureNormalizer {
+            mean: vec![0.0; w],
+            std: vec![1.0; w],
+        };
+        HoodStats {
+            node: n(StepGraph::node_width(levels)),
+            mesh: n(StepGraph::MESH_WIDTH),
+            body: n(StepGraph::BODY_WIDTH),
+            output: n(3),
+        }
+    }
+
     /// Reads `dir/hood.json`; errors name the file.
     pub fn read(dir: &Path) -> Result<Self, ModelError> {
         let path = dir.join(STATS_FILE);

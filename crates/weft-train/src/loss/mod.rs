@@ -4,8 +4,9 @@
 //!
 //! - [`supervised`]: vertex, edge and normal terms (eq. 1–3) as burn tensor code.
 //! - [`physics`]: collision, gravity, stretch and shear (eq. 4–8) as one custom autodiff
-//!   operation over weft-sim's energies; [`collision_energies`] ([`collision_energy`] per frame), [`gravity_energy`] and
-//!   [`membrane_energies`] build those energies for a garment.
+//!   operation over weft-sim's energies; [`collision_energies`] ([`collision_energy`]
+//!   per frame), [`gravity_energy`] and [`membrane_energies`] build those energies for a
+//!   garment.
 
 pub mod physics;
 pub mod supervised;
@@ -37,20 +38,30 @@ pub fn collision_energies<P: BodyProximity + Sync>(
     eps: f64,
     radius: f64,
 ) -> Result<FrameEnergies> {
-    let want = bodies.len() * vertex_count;
-    if x.len() != want {
-        return Err(crate::TrainError::Shape {
-            what: "collision loss positions".into(),
-            expected: format!("{} frames × {vertex_count} vertices", bodies.len()),
-            found: x.len().to_string(),
-        });
-    }
+    check_window_positions(x, bodies.len(), vertex_count)?;
     let frames = bodies
         .iter()
         .zip(x.chunks(vertex_count.max(1)))
         .map(|(body, xt)| collision_energy(body, xt, eps, radius))
         .collect::<Result<_>>()?;
     FrameEnergies::per_frame(frames)
+}
+
+/// Checks that the collision term's positions `x` are `frames` frames of `vertex_count`
+/// vertices.
+pub(crate) fn check_window_positions(
+    x: &[[f64; 3]],
+    frames: usize,
+    vertex_count: usize,
+) -> Result<()> {
+    if x.len() != frames * vertex_count {
+        return Err(crate::TrainError::Shape {
+            what: "collision loss positions".into(),
+            expected: format!("{frames} frames × {vertex_count} vertices"),
+            found: x.len().to_string(),
+        });
+    }
+    Ok(())
 }
 
 /// Eq. 4 for one frame: the contacts of the garment's vertices `x` against `body`, found

@@ -806,7 +806,6 @@ pub fn save_stats(dir: &Path, stats: &HoodStats) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use weft_models::hood::features::StepGraph;
 
     /// One 300-vertex skirt on one body, a short walk.
     fn task(random_centres: bool) -> HoodTask {
@@ -829,16 +828,7 @@ mod tests {
         };
         // Pass-through normalisers: fitting them takes implicit steps this test does not
         // need.
-        let identity = |width: usize| weft_nn::FeatureNormalizer {
-            mean: vec![0.0; width],
-            std: vec![1.0; width],
-        };
-        let stats = HoodStats {
-            node: identity(StepGraph::node_width(config.levels)),
-            mesh: identity(StepGraph::MESH_WIDTH),
-            body: identity(StepGraph::BODY_WIDTH),
-            output: identity(3),
-        };
+        let stats = HoodStats::identity(config.levels);
         let body = weft_body::default_body().unwrap();
         HoodTask::new(
             &config,

@@ -45,9 +45,9 @@ pub use terms::{Term, TermWeights};
 
 use crate::error::{Result, TrainError};
 use crate::loss::{
-    collision_energy, edge_loss, gravity_energy, mean_vertex_error_mm, membrane_energies,
-    normal_loss, physics_loss, rest_frames, vertex_loss, FrameEnergies, GarmentTopology,
-    PhysicsImpl, Targets,
+    check_window_positions, collision_energy, edge_loss, gravity_energy, mean_vertex_error_mm,
+    membrane_energies, normal_loss, physics_loss, rest_frames, vertex_loss, FrameEnergies,
+    GarmentTopology, PhysicsImpl, Targets,
 };
 use crate::task::{Metrics, StepEnd, TrainTask};
 
@@ -199,13 +199,7 @@ impl Pair {
             &s.trans[range],
         )?;
         let n = self.topology.vertex_count();
-        if x.len() != posed.len() * n {
-            return Err(TrainError::Shape {
-                what: "collision loss positions".into(),
-                expected: format!("{} frames × {n} vertices", posed.len()),
-                found: x.len().to_string(),
-            });
-        }
+        check_window_positions(x, posed.len(), n)?;
         let mut frames = Vec::with_capacity(posed.len());
         for (t, (frame, xt)) in posed.frames().zip(x.chunks_exact(n.max(1))).enumerate() {
             let p: Vec<[f64; 3]> = frame.iter().map(|q| q.map(f64::from)).collect();
