@@ -41,6 +41,13 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    // Every command that runs a network allocates and frees megabyte tensors per step;
+    // glibc's defaults page them back in each time (HOOD's paper network: 515 → 389 ms per
+    // step, docs/benchmarks.md). `WEFT_MALLOC_DEFAULTS=1` keeps glibc's defaults, for
+    // measuring the difference.
+    if std::env::var_os("WEFT_MALLOC_DEFAULTS").is_none() {
+        weft_nn::backend::retain_freed_memory();
+    }
     match cmd::run(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {

@@ -29,7 +29,6 @@ pub struct DemoArgs {
 }
 
 pub fn run(args: &DemoArgs) -> Result<()> {
-    weft_nn::backend::retain_freed_memory();
     let started = Instant::now();
     if args.out.exists() && !args.out.is_dir() {
         bail!(

@@ -5,7 +5,6 @@ use std::time::Instant;
 
 use clap::Args;
 use weft_models::ModelKind;
-use weft_nn::backend::retain_freed_memory;
 use weft_pipeline::train::{train_run, TrainSpec};
 
 #[derive(Args)]
@@ -42,7 +41,6 @@ pub struct TrainArgs {
 }
 
 pub fn run(a: &TrainArgs) -> anyhow::Result<()> {
-    retain_freed_memory();
     let spec = TrainSpec {
         model: a.model,
         data: a.data.clone(),
