@@ -9,9 +9,11 @@
 //! inertial target and time step, and the body contacts found from the start-of-step
 //! positions, and returns the [`IncrementalPotential`]
 //!
-//! `E(x) = stretching + bending + gravity + inertia(x̂, h) + collision(k_c) + friction`,
+//! `E(x) = stretching + bending + gravity + inertia(x̂, h) + collision(k_c) + friction
+//! [+ buttons]`,
 //!
-//! every term with weight 1, in that order (`k_c` is the collision term's stiffness). Minimising it over the end-of-step positions
+//! every term with weight 1, in that order (buttons only while the garment has some,
+//! [`ClothModel::with_buttons`]) (`k_c` is the collision term's stiffness). Minimising it over the end-of-step positions
 //! is one implicit-Euler step (what the simulator does); its value and gradient at a
 //! network's predicted positions are HOOD's loss.
 //!
@@ -30,6 +32,7 @@ use rayon::prelude::*;
 use weft_mesh::{Hinge, Topology, TriMesh};
 
 use crate::bending::Bending;
+use crate::buttons::Buttons;
 use crate::collision::CubicCollision;
 use crate::contact::{BodyContact, BodyProximity, VertexContact};
 use crate::error::{check_count, check_len, check_nonneg, check_vertex, SimError};
@@ -55,6 +58,8 @@ pub struct ClothModel {
     masses: Arc<[f64]>,
     friction: Arc<[f64]>,
     options: SimOptions,
+    /// Button pairs held together, if the garment has any ([`ClothModel::with_buttons`]).
+    buttons: Option<Buttons>,
 }
 
 /// What one step brings to the potential ([`ClothModel::step_potential`]).
@@ -156,13 +161,72 @@ impl ClothModel {
     }
 
     fn rebuilt(&self, maps: MaterialMaps) -> Result<Self, SimError> {
-        Self::build(
+        let model = Self::build(
             Arc::clone(&self.rest),
             Some(&self.stretch),
             Arc::clone(&self.hinges),
             maps,
             self.options,
-        )
+        )?;
+        // The buttons' stiffness follows the new material.
+        match &self.buttons {
+            Some(b) => model.with_buttons(b.pairs()),
+            None => Ok(model),
+        }
+    }
+
+    /// This garment with `pairs` of vertices buttoned together (none: unbuttoned), each
+    /// pair a zero-length spring in the potential ([`Buttons`]). A pair's stiffness is
+    /// the cloth's own: the plane-stress Young's modulus times the thickness,
+    /// `4μ(λ + μ)/(λ + 2μ) · t` (N/m), averaged over the faces around its two vertices
+    /// (about 39 N/m for HOOD's default material), so a button holds like the fabric
+    /// it is sewn to. Errors on an index out of range or a vertex paired with itself.
+    pub fn with_buttons(&self, pairs: &[[u32; 2]]) -> Result<Self, SimError> {
+        if pairs.is_empty() {
+            return Ok(self.without_buttons());
+        }
+        let n = self.vertex_count();
+        let (mut sum, mut count) = (vec![0.0; n], vec![0usize; n]);
+        for (face, p) in self.rest.faces.iter().zip(self.stretch.params()) {
+            let k = 4.0 * p.mu * (p.lambda + p.mu) / (p.lambda + 2.0 * p.mu) * p.thickness;
+            for &v in face {
+                sum[v as usize] += k;
+                count[v as usize] += 1;
+            }
+        }
+        let mut stiffness = Vec::with_capacity(pairs.len());
+        for &[a, b] in pairs {
+            let ends = [a, b].map(|v| v as usize).map(|v| {
+                (
+                    sum.get(v).copied().unwrap_or(0.0),
+                    count.get(v).copied().unwrap_or(0),
+                )
+            });
+            let faces = ends[0].1 + ends[1].1;
+            // A vertex on no face has no fabric to borrow from: `Buttons::new` refuses 0.
+            stiffness.push(if faces == 0 {
+                0.0
+            } else {
+                (ends[0].0 + ends[1].0) / faces as f64
+            });
+        }
+        Ok(ClothModel {
+            buttons: Some(Buttons::new(n, pairs.to_vec(), stiffness)?),
+            ..self.clone()
+        })
+    }
+
+    /// This garment unbuttoned.
+    pub fn without_buttons(&self) -> Self {
+        ClothModel {
+            buttons: None,
+            ..self.clone()
+        }
+    }
+
+    /// The button springs, if the garment is buttoned.
+    pub fn buttons(&self) -> Option<&Buttons> {
+        self.buttons.as_ref()
     }
 
     /// Builds the model; `frames_of`: a stretch term whose rest frames (of `rest`) to
@@ -201,6 +265,7 @@ impl ClothModel {
             masses: masses.into(),
             friction: maps.vertex_friction.into(),
             options,
+            buttons: None,
         })
     }
 
@@ -259,7 +324,7 @@ impl ClothModel {
         let n = self.vertex_count();
         let o = &self.options;
         let stiffness = step.collision_stiffness.unwrap_or(o.collision_stiffness);
-        IncrementalPotential::new(n)
+        let potential = IncrementalPotential::new(n)
             .with(1.0, Term::Stretch(self.stretch.clone()))?
             .with(1.0, Term::Bending(self.bending.clone()))?
             .with(
@@ -286,7 +351,11 @@ impl ClothModel {
             .with(
                 1.0,
                 Term::Friction(Friction::new(n, o.friction_eps, contacts.friction)?),
-            )
+            )?;
+        match &self.buttons {
+            Some(b) => potential.with(1.0, Term::Buttons(b.clone())),
+            None => Ok(potential),
+        }
     }
 
     /// The body contacts of the free vertices at `start` (HOOD: each vertex's closest

@@ -251,6 +251,18 @@ proptest! {
     }
 
     #[test]
+    fn button_derivatives(seed in any::<u64>()) {
+        let mut rng = Rng::new(seed);
+        let rest = rest_mesh(&mut rng);
+        let x = perturbed(&rest.positions, &mut rng, 0.2);
+        let n = rest.vertex_count() as u32;
+        let pairs: Vec<[u32; 2]> = (0..4u32).map(|p| [p, (p + 3 + (seed % 2) as u32) % n]).collect();
+        let k: Vec<f64> = pairs.iter().map(|_| rng.uniform(1.0, 100.0)).collect();
+        let e = Buttons::new(rest.vertex_count(), pairs, k).unwrap();
+        check(&e, &x, true);
+    }
+
+    #[test]
     fn gravity_and_inertia_derivatives(seed in any::<u64>()) {
         let mut rng = Rng::new(seed);
         let rest = rest_mesh(&mut rng);

@@ -28,6 +28,7 @@
 pub mod attachment;
 pub mod bending;
 pub mod body;
+pub mod buttons;
 pub mod cloth;
 pub mod collision;
 pub mod contact;
@@ -54,6 +55,7 @@ mod fd_tests;
 pub use attachment::{Attachment, SkinAnchors};
 pub use bending::{Bending, BendingScale, RestAngle};
 pub use body::{check_garment_gap, Penetration, PosedBody, MAX_GARMENT_GAP};
+pub use buttons::Buttons;
 pub use cloth::{ClothModel, StepContacts, StepInputs};
 pub use collision::CubicCollision;
 pub use contact::{BodyContact, BodyProximity, Plane, Sphere, VertexContact};

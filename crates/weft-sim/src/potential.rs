@@ -8,6 +8,7 @@
 //! without downcasting.
 
 use crate::bending::Bending;
+use crate::buttons::Buttons;
 use crate::collision::CubicCollision;
 use crate::energy::{Energy, HessianKind};
 use crate::error::{check_eval, check_len, Output, SimError};
@@ -32,6 +33,8 @@ pub enum Term {
     Collision(CubicCollision),
     /// Friction.
     Friction(Friction),
+    /// Button pairs held together.
+    Buttons(Buttons),
     /// Seed 000 eq. 4.
     LinearCollision(LinearCollision),
     /// Seed 000 eq. 6.
@@ -58,6 +61,7 @@ impl Term {
             Term::Inertia(e) => e,
             Term::Collision(e) => e,
             Term::Friction(e) => e,
+            Term::Buttons(e) => e,
             Term::LinearCollision(e) => e,
             Term::UvStretch(e) => e,
             Term::UvShear(e) => e,

@@ -199,6 +199,12 @@ impl ClothSimulator {
         Ok(())
     }
 
+    /// Unbuttons the garment from the next step on (seed 004 Fig. 4). The Hessian's
+    /// pattern keeps the pairs' blocks, which are zero from then on.
+    pub fn unbutton(&mut self) {
+        self.model = self.model.without_buttons();
+    }
+
     /// Advances by `dt` seconds against `body` (at its end-of-step state; `None`: no body).
     pub fn step(
         &mut self,
@@ -348,6 +354,63 @@ mod tests {
             })
             .fold(0.0, f64::max);
         assert!(strain < 0.05, "max edge strain {strain}");
+    }
+
+    /// The hanging square of the test above with its two free corners buttoned together:
+    /// they close up as it falls; unbuttoned after a second, they part again, while the
+    /// same square never buttoned keeps them a cloth width apart throughout.
+    #[test]
+    fn buttons_hold_two_corners_together_until_unbuttoned() {
+        let (nx, h) = (11, 0.05);
+        let rest = grid(nx, nx, h);
+        let model = ClothModel::uniform(&rest, &Material::cotton(), SimOptions::default()).unwrap();
+        let corners = [(nx * nx - nx) as u32, (nx * nx - 1) as u32];
+        let buttoned = model.with_buttons(&[corners]).unwrap();
+        let k = buttoned.buttons().unwrap().stiffness()[0];
+        assert!(k > 1.0 && k.is_finite(), "{k}");
+        assert!(buttoned
+            .with_buttons(&[[0, nx as u32 * nx as u32]])
+            .is_err());
+        // A material change keeps the pairs and rescales the stiffness.
+        let silk = buttoned.with_material(&Material::silk()).unwrap();
+        assert_eq!(silk.buttons().unwrap().pairs(), &[corners]);
+        let gap = |sim: &ClothSimulator| {
+            let x = sim.positions();
+            (v3(x[corners[0] as usize]) - v3(x[corners[1] as usize])).norm()
+        };
+        let run = |model: ClothModel, unbutton_at: Option<usize>| {
+            let mut sim = ClothSimulator::from_model(model).unwrap();
+            sim.pin(&[0, (nx - 1) as u32]).unwrap();
+            let mut gaps = Vec::new();
+            for frame in 0..60 {
+                if Some(frame) == unbutton_at {
+                    sim.unbutton();
+                }
+                sim.step(1.0 / 30.0, None).unwrap();
+                gaps.push(gap(&sim));
+            }
+            gaps
+        };
+        let open = run(model.clone(), None);
+        let closed = run(buttoned.clone(), Some(30));
+        let width = (nx - 1) as f64 * h;
+        assert!(open.iter().all(|&g| g > 0.9 * width), "{open:?}");
+        assert!(closed[29] < 0.1 * width, "buttoned gap {}", closed[29]);
+        assert!(closed[59] > 0.5 * width, "unbuttoned gap {}", closed[59]);
+        // The button is a term of the potential while buttoned, and only then.
+        let names = |sim: &ClothSimulator| -> Vec<&'static str> {
+            sim.potential()
+                .terms()
+                .iter()
+                .map(|t| t.term.energy().name())
+                .collect()
+        };
+        let mut sim = ClothSimulator::from_model(buttoned).unwrap();
+        sim.step(1.0 / 30.0, None).unwrap();
+        assert_eq!(names(&sim).last(), Some(&"buttons"));
+        sim.unbutton();
+        sim.step(1.0 / 30.0, None).unwrap();
+        assert!(!names(&sim).contains(&"buttons"));
     }
 
     /// A square dropped on a sphere drapes over it without passing through.
