@@ -282,3 +282,84 @@ fn material_files_and_pinned_vertices() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("bad.toml"), "{}", stderr(&o));
 }
+
+/// `--buttons`: two hem vertices on opposite sides of the skirt buttoned together come
+/// close; with `--unbutton-at 1` they are apart again by the last frame. A pair out of
+/// range or a file that is not pairs is refused, naming the file.
+#[test]
+fn buttons_hold_a_pair_until_unbuttoned() {
+    let dir = scratch("buttons");
+    let g = skirt(&dir);
+    let mesh = weft_mesh::io::load_obj(&g).unwrap().mesh;
+    // The lowest vertex and the lowest one farthest from it: across the hem.
+    let low = |v: &usize| mesh.positions[*v][1];
+    let a = (0..mesh.vertex_count())
+        .min_by(|x, y| low(x).total_cmp(&low(y)))
+        .unwrap();
+    let dist = |v: usize| weft_mesh::vec3::dist(mesh.positions[a], mesh.positions[v]);
+    let b = (0..mesh.vertex_count())
+        .filter(|&v| (low(&v) - low(&a)).abs() < 0.01)
+        .max_by(|&x, &y| dist(x).total_cmp(&dist(y)))
+        .unwrap();
+    let pairs = dir.join("pairs.json");
+    std::fs::write(&pairs, format!("[[{a}, {b}]]")).unwrap();
+    let gap = |out: &Path, frame: usize| {
+        let x = weft_mesh::export::npy::read_npy(&out.join("frames.npy")).unwrap();
+        let v: Vec<f64> = match x.data {
+            weft_mesh::export::npy::NpyData::F32(v) => v.into_iter().map(f64::from).collect(),
+            weft_mesh::export::npy::NpyData::F64(v) => v,
+            _ => panic!("frames.npy holds floats"),
+        };
+        let n = mesh.vertex_count();
+        let p = |i: usize| -> [f64; 3] { std::array::from_fn(|k| v[3 * (frame * n + i) + k]) };
+        weft_mesh::vec3::dist(p(a), p(b))
+    };
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "simulate",
+            "--garment",
+            s(&g),
+            "--motion",
+            "walk",
+            "--frames",
+            "4",
+            "--warmup",
+            "6",
+            "--substeps",
+            "2",
+            "--material",
+            "silk",
+            "--out",
+            s(out),
+        ];
+        args.extend_from_slice(extra);
+        weft(&args)
+    };
+    let held = dir.join("held");
+    let o = run(&held, &["--buttons", s(&pairs)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let open = dist(b);
+    assert!(gap(&held, 0) < 0.5 * open, "{} of {open}", gap(&held, 0));
+    let undone = dir.join("undone");
+    let o = run(&undone, &["--buttons", s(&pairs), "--unbutton-at", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        gap(&undone, 3) > 1.5 * gap(&held, 3),
+        "{} vs {}",
+        gap(&undone, 3),
+        gap(&held, 3)
+    );
+
+    let bad = dir.join("bad.json");
+    for (text, want) in [
+        (format!("[[{a}, 99999]]"), "pair 0"),
+        ("{\"a\": 1}".to_string(), "JSON list of vertex pairs"),
+    ] {
+        std::fs::write(&bad, text).unwrap();
+        let o = run(&dir.join("never"), &["--buttons", s(&bad)]);
+        assert!(!o.status.success());
+        let e = stderr(&o);
+        assert!(e.contains("bad.json") && e.contains(want), "{e}");
+        assert!(!dir.join("never").exists());
+    }
+}

@@ -21,6 +21,7 @@ use weft_motion::Motion;
 
 use crate::attachment::{Attachment, SkinAnchors};
 use crate::body::{check_garment_gap, Penetration, PosedBody};
+use crate::cloth::ClothModel;
 use crate::energy::Energy;
 use crate::error::SimError;
 use crate::material::Material;
@@ -67,6 +68,15 @@ pub struct SequenceOptions {
     /// as its rest mesh.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub start_positions: Option<Vec<[f64; 3]>>,
+    /// Garment vertex pairs (0-based) buttoned together, each a zero-length spring as
+    /// stiff as the fabric around it ([`crate::ClothModel::with_buttons`]): a jacket's
+    /// front held closed. Default: none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub buttons: Vec<[u32; 2]>,
+    /// The output frame from which the buttons are undone (seed 004 Fig. 4); `None`:
+    /// buttoned throughout. Default: `None`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unbutton_at: Option<usize>,
 }
 
 /// Newton iterations per sub-step in a sequence: a fixed budget (the energy still
@@ -89,6 +99,8 @@ impl Default for SequenceOptions {
             attachment: Attachment::TopOpening,
             pinned: Vec::new(),
             start_positions: None,
+            buttons: Vec::new(),
+            unbutton_at: None,
         }
     }
 }
@@ -415,7 +427,9 @@ pub fn simulate_sequence(
         opts.max_initial_penetration,
     )?;
     // The rest shape stays the garment as given (translation does not change it).
-    let mut sim = ClothSimulator::new(garment, material, opts.sim)?;
+    let model = ClothModel::uniform(garment, material, opts.sim)?.with_buttons(&opts.buttons)?;
+    let mut sim = ClothSimulator::from_model(model)?;
+    let mut unbuttoned = opts.buttons.is_empty();
     let zero = vec![[0.0; 3]; start.positions.len()];
     sim.set_state(start.positions.clone(), zero)?;
     let mut held = opts.attachment.vertices(garment);
@@ -453,6 +467,10 @@ pub fn simulate_sequence(
     }
     for k in 1..timeline.len() {
         let output = k.saturating_sub(first_output);
+        if !unbuttoned && k >= first_output && opts.unbutton_at.is_some_and(|f| output >= f) {
+            sim.unbutton();
+            unbuttoned = true;
+        }
         let body_next = timeline.body(k)?;
         for s in 1..=opts.substeps {
             lerp_into(

@@ -1,5 +1,6 @@
-//! `--material` and `--pin`: how every command that simulates cloth (`simulate`, `bench
-//! simulate`, `garment prepare`) names the fabric and the vertices held on the body.
+//! `--material`, `--pin` and `--buttons`: how every command that simulates cloth
+//! (`simulate`, `bench simulate`, `garment prepare`, HOOD's `animate`) names the fabric,
+//! the vertices held on the body and the vertex pairs buttoned together.
 
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -76,6 +77,18 @@ pub fn pinned(spec: &str) -> Result<Vec<u32>> {
         bail!("{origin}: no vertex indices; expected 0-based indices and ranges like 0,5,17-30");
     }
     Ok(out)
+}
+
+/// `--buttons PAIRS.json`: a JSON list of 0-based garment vertex pairs `[[a, b], ...]`.
+pub fn buttons(path: &std::path::Path) -> Result<Vec<[u32; 2]>> {
+    let text = weft_mesh::io::read_input_to_string(path)
+        .with_context(|| format!("--buttons {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| {
+        format!(
+            "--buttons {}: expected a JSON list of vertex pairs like [[12, 340], [15, 352]]",
+            path.display()
+        )
+    })
 }
 
 #[cfg(test)]

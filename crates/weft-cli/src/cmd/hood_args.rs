@@ -9,7 +9,7 @@ use clap::Args;
 use weft_mesh::export::npy::{read_npy, NpyData};
 use weft_models::hood::{HoodPredictor, Materials};
 
-use super::cloth_args::material;
+use super::cloth_args::{buttons, material};
 
 #[derive(Args)]
 pub struct HoodArgs {
@@ -105,16 +105,4 @@ fn material_map(path: &std::path::Path, vertices: usize, materials: usize) -> Re
             })
         })
         .collect()
-}
-
-/// Button pairs from a JSON file `[[a, b], ...]`.
-fn buttons(path: &std::path::Path) -> Result<Vec<[u32; 2]>> {
-    let text = weft_mesh::io::read_input_to_string(path)
-        .with_context(|| format!("--buttons {}", path.display()))?;
-    serde_json::from_str(&text).with_context(|| {
-        format!(
-            "--buttons {}: expected a JSON list of vertex pairs like [[12, 340], [15, 352]]",
-            path.display()
-        )
-    })
 }

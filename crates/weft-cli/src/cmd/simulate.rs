@@ -67,6 +67,14 @@ pub struct SimulateArgs {
     /// and friction only; loose templates may slide down).
     #[arg(long, value_enum, default_value_t = AttachArg::Top)]
     attach: AttachArg,
+    /// Vertex pairs buttoned together, a JSON file `[[a, b], ...]` of 0-based garment
+    /// vertex indices: each pair is held by a spring as stiff as the fabric around it
+    /// (a jacket's front held closed).
+    #[arg(long, value_name = "PAIRS.json")]
+    buttons: Option<PathBuf>,
+    /// The output frame from which the buttons are undone.
+    #[arg(long, value_name = "FRAME", requires = "buttons")]
+    unbutton_at: Option<usize>,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -97,6 +105,25 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             AttachArg::Top => Attachment::TopOpening,
             AttachArg::None => Attachment::None,
         },
+        buttons: match &args.buttons {
+            Some(path) => {
+                let pairs = super::cloth_args::buttons(path)?;
+                let n = garment.vertex_count();
+                if let Some((k, [a, b])) = pairs
+                    .iter()
+                    .enumerate()
+                    .find(|(_, &[a, b])| a == b || a as usize >= n || b as usize >= n)
+                {
+                    bail!(
+                        "--buttons {}: pair {k} ({a}, {b}): expected two different vertices below {n}, the garment's vertex count",
+                        path.display()
+                    );
+                }
+                pairs
+            }
+            None => solver.buttons.clone(),
+        },
+        unbutton_at: args.unbutton_at.or(solver.unbutton_at),
         ..solver
     };
     // The directory is made when there is something to write (a failed run leaves

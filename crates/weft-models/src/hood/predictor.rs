@@ -98,7 +98,7 @@ impl HoodPredictor {
             &self.config,
         )?;
         if !self.buttons.is_empty() {
-            scene.garment = scene.garment.with_buttons(&self.buttons)?;
+            scene = scene.with_buttons(&self.buttons)?;
         }
         Ok(scene)
     }

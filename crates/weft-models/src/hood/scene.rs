@@ -273,6 +273,27 @@ impl Scene {
 }
 
 impl Scene {
+    /// This scene with `pairs` of garment vertices buttoned: extra mesh edges in the
+    /// graph ([`HoodGarment::with_buttons`]) and zero-length springs in the potential
+    /// ([`ClothModel::with_buttons`]), both while a step is buttoned.
+    pub fn with_buttons(mut self, pairs: &[[u32; 2]]) -> Result<Self, ModelError> {
+        self.garment = self.garment.with_buttons(pairs)?;
+        self.cloth = self
+            .cloth
+            .with_buttons(pairs)
+            .map_err(|e| ModelError::Garment(format!("the buttons: {e}")))?;
+        Ok(self)
+    }
+
+    /// The garment's physics at step `at`: without its buttons once unbuttoned.
+    pub fn cloth_at(&self, at: StepAt) -> std::borrow::Cow<'_, ClothModel> {
+        if at.buttoned || self.cloth.buttons().is_none() {
+            std::borrow::Cow::Borrowed(&self.cloth)
+        } else {
+            std::borrow::Cow::Owned(self.cloth.without_buttons())
+        }
+    }
+
     /// The body as the step `at` sees it: at its end-of-step state, having moved there
     /// from frame `at.t` (the settling step: still at `at.t`).
     pub fn posed_body(&self, at: StepAt) -> Result<PosedBody, ModelError> {
@@ -290,7 +311,7 @@ impl Scene {
     /// targets): the reference a HOOD step is measured against.
     pub fn implicit_step(&self, state: StateRef, at: StepAt) -> Result<Vec<[f64; 3]>, ModelError> {
         let sim = |e: weft_sim::SimError| ModelError::Garment(format!("the implicit step: {e}"));
-        let mut solver = ClothSimulator::from_model(self.cloth.clone()).map_err(sim)?;
+        let mut solver = ClothSimulator::from_model(self.cloth_at(at).into_owned()).map_err(sim)?;
         let v = state
             .cur
             .iter()
@@ -361,6 +382,24 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("material map"), "{e}");
+        // Buttons join the graph and the potential while a step is buttoned.
+        let buttoned = scene.clone().with_buttons(&[[0, 5]]).unwrap();
+        assert_eq!(buttoned.garment.buttons, vec![[0, 5], [5, 0]]);
+        let at = |buttoned| StepAt {
+            t: 0,
+            settle: false,
+            dt: 1.0 / 30.0,
+            buttoned,
+        };
+        assert_eq!(
+            buttoned
+                .cloth_at(at(true))
+                .buttons()
+                .map(|b| b.pairs().to_vec()),
+            Some(vec![[0, 5]])
+        );
+        assert!(buttoned.cloth_at(at(false)).buttons().is_none());
+        assert!(scene.clone().with_buttons(&[[3, 3]]).is_err());
         let nan = vec![[[f32::NAN; 3]; 24]; 3];
         let bad = Clip {
             poses: &nan,

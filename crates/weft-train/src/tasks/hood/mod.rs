@@ -91,6 +91,9 @@ pub enum Term {
     Collision,
     /// Friction against the body.
     Friction,
+    /// Button pairs held together (weft-sim `Buttons`; zero for a sample without
+    /// buttons or once unbuttoned).
+    Buttons,
     /// The distance to weft-sim's implicit step from the same state (cm², mean over the
     /// vertices): the potential's minimiser as a target, see [`HoodTraining::solver_weight`].
     Solver,
@@ -98,13 +101,14 @@ pub enum Term {
 
 impl Term {
     /// The terms of the potential, in its order.
-    pub const POTENTIAL: [Term; 6] = [
+    pub const POTENTIAL: [Term; 7] = [
         Term::Stretching,
         Term::Bending,
         Term::Gravity,
         Term::Inertia,
         Term::Collision,
         Term::Friction,
+        Term::Buttons,
     ];
 }
 
@@ -117,6 +121,7 @@ impl LossTerm for Term {
             Term::Inertia => "inertia",
             Term::Collision => "collision",
             Term::Friction => "friction",
+            Term::Buttons => "buttons",
             Term::Solver => "solver",
         }
     }
@@ -568,8 +573,9 @@ impl HoodTask {
         let body = scene.posed_body(at)?;
         let dt = at.dt;
         let target = advance.inertial_target();
-        let stiffness = scene.cloth.options().collision_stiffness * collision_weight;
-        let potential = scene.cloth.step_potential(&StepInputs {
+        let cloth = scene.cloth_at(at);
+        let stiffness = cloth.options().collision_stiffness * collision_weight;
+        let potential = cloth.step_potential(&StepInputs {
             start: cur,
             target: &target,
             dt,
@@ -660,9 +666,24 @@ impl TrainTask for HoodTask {
                     solver_loss(x.clone(), &target, &self.device)
                 } else {
                     let index = Term::POTENTIAL.iter().position(|a| a == term).unwrap_or(0);
-                    let energy = potential.get(index).cloned().ok_or_else(|| {
-                        TrainError::config("train", term.name(), "a term of the potential")
-                    })?;
+                    let energy = match potential.get(index) {
+                        Some(energy) => energy.clone(),
+                        // The potential holds the buttons only while there are some.
+                        None if *term == Term::Buttons => {
+                            *slot = Some(
+                                slot.take()
+                                    .unwrap_or_else(|| Tensor::<1>::zeros([1], &self.device)),
+                            );
+                            continue;
+                        }
+                        None => {
+                            return Err(TrainError::config(
+                                "train",
+                                term.name(),
+                                "a term of the potential",
+                            ))
+                        }
+                    };
                     physics_loss(
                         x3.clone(),
                         &Arc::new(FrameEnergies::per_frame(vec![energy])?),
