@@ -40,7 +40,6 @@ top=$(row "$tmp/sim/obj" simulated)
 bottom=$(row "$tmp/hood" HOOD)
 python3 - "$out" "$garment" "$tmp/sim/obj" "$tmp/hood" <<PY
 import math, os, sys
-from PIL import Image
 out, garment, sim, hood = sys.argv[1:5]
 def load(p):
     v, f = [], []
@@ -57,17 +56,6 @@ for name, d in (("simulated", sim), ("HOOD", hood)):
         v, _ = load(os.path.join(d, p))
         s += [abs(math.dist(v[a], v[b]) / math.dist(rest[a], rest[b]) - 1) for a, b in edges]
     print(f"{name}: {len(os.listdir(d))} frames, mean edge strain {100 * sum(s) / max(len(s), 1):.2f} %")
-rows = [[Image.open(p) for p in """$top""".split()], [Image.open(p) for p in """$bottom""".split()]]
-w = max(sum(i.width for i in r) for r in rows if r)
-h = sum(max((i.height for i in r), default=0) for r in rows)
-sheet = Image.new("RGB", (w, h), "white")
-y = 0
-for r in rows:
-    x = 0
-    for i in r:
-        sheet.paste(i, (x, y))
-        x += i.width
-    y += max((i.height for i in r), default=0)
-sheet.save(out)
-print("wrote", out)
 PY
+python3 "$(dirname "$0")/contact_sheet.py" "$out" "$top" "$bottom"
+echo "wrote $out"

@@ -223,3 +223,47 @@ fn prepare_writes_nothing_when_the_weights_fail() {
     assert!(!Path::new(&out).exists(), "a mesh without its weights");
     assert!(!Path::new(&report).exists());
 }
+
+/// `weft garment generate --open-front N --buttons PAIRS.json`: the top comes out cut
+/// down the front (more vertices, the same faces and UVs), with N button pairs of
+/// distinct, in-range vertices at the same position; either flag alone is refused.
+#[test]
+fn generate_opens_a_top_down_the_front() {
+    let dir = scratch("open-front");
+    let (closed, open, pairs) = (
+        file(&dir, "closed.obj"),
+        file(&dir, "open.obj"),
+        file(&dir, "pairs.json"),
+    );
+    let base = [
+        "garment",
+        "generate",
+        "--kind",
+        "tshirt",
+        "--vertices",
+        "800",
+    ];
+    ok(&[&base[..], &["--out", &closed]].concat());
+    let said = ok(&[
+        &base[..],
+        &["--out", &open, "--open-front", "4", "--buttons", &pairs],
+    ]
+    .concat());
+    assert!(said.contains("4 button pairs"), "{said}");
+    let a = weft_mesh::io::load_obj(Path::new(&closed)).unwrap();
+    let b = weft_mesh::io::load_obj(Path::new(&open)).unwrap();
+    assert!(b.mesh.vertex_count() > a.mesh.vertex_count());
+    assert_eq!(b.mesh.face_count(), a.mesh.face_count());
+    assert_eq!(b.corner_uvs, a.corner_uvs);
+    let list: Vec<[u32; 2]> =
+        serde_json::from_str(&std::fs::read_to_string(&pairs).unwrap()).unwrap();
+    assert_eq!(list.len(), 4);
+    for [p, q] in list {
+        assert!(p != q && (q as usize) < b.mesh.vertex_count());
+        assert_eq!(b.mesh.positions[p as usize], b.mesh.positions[q as usize]);
+    }
+    let e = fails(&[&base[..], &["--out", &open, "--open-front", "4"]].concat());
+    assert!(e.contains("--buttons"), "{e}");
+    let e = fails(&[&base[..], &["--out", &open, "--buttons", &pairs]].concat());
+    assert!(e.contains("--open-front"), "{e}");
+}

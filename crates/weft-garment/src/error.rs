@@ -35,6 +35,9 @@ pub enum GarmentError {
     /// The body model failed (bad β count, …).
     #[error(transparent)]
     Body(#[from] weft_body::BodyError),
+    /// The garment cannot be opened down the front.
+    #[error("cannot open the garment down the front: {0}")]
+    OpenFront(String),
     /// Writing the garment failed.
     #[error("cannot write {path}")]
     Io {

@@ -16,6 +16,7 @@ pub mod fit;
 pub mod kind;
 pub mod obj;
 pub mod onbody;
+pub mod open_front;
 mod pants;
 pub mod prepare;
 pub mod skirt;
@@ -26,6 +27,7 @@ pub use error::GarmentError;
 pub use fit::{Measurements, TorsoSection};
 pub use kind::{DressTop, GarmentKind, Style};
 pub use onbody::FitBody;
+pub use open_front::OpenFront;
 pub use skirt::SkirtLength;
 
 use weft_mesh::TriMesh;

@@ -4,6 +4,7 @@
 //! Everything here is plain `f64` geometry with no learning dependency, so the crate
 //! builds and tests in seconds and every other crate can stand on it.
 
+pub mod cut;
 pub mod eccentricity;
 pub mod error;
 pub mod export;

@@ -177,10 +177,11 @@ impl ClothModel {
 
     /// This garment with `pairs` of vertices buttoned together (none: unbuttoned), each
     /// pair a zero-length spring in the potential ([`Buttons`]). A pair's stiffness is
-    /// the cloth's own: the plane-stress Young's modulus times the thickness,
-    /// `4μ(λ + μ)/(λ + 2μ) · t` (N/m), averaged over the faces around its two vertices
-    /// (about 39 N/m for HOOD's default material), so a button holds like the fabric
-    /// it is sewn to. Errors on an index out of range or a vertex paired with itself.
+    /// the cloth's own: Young's modulus times the thickness, `4μ(λ + μ)/(λ + 2μ) · t`
+    /// (N/m; with the plane-stress λ this is `E t` exactly), averaged over the faces
+    /// around its two vertices (33 N/m for HOOD's default material, 1 050 for cotton),
+    /// so a button holds like the fabric it is sewn to. Errors on an index out of range
+    /// or a vertex paired with itself.
     pub fn with_buttons(&self, pairs: &[[u32; 2]]) -> Result<Self, SimError> {
         if pairs.is_empty() {
             return Ok(self.without_buttons());

@@ -57,6 +57,14 @@ pub struct GenerateArgs {
     /// Output OBJ (positions, vt UVs in metres, faces).
     #[arg(long)]
     out: PathBuf,
+    /// Cut the garment open down the front, from the neckline to the hem (a jacket from
+    /// a top), with this many button pairs across the cut, written to --buttons.
+    #[arg(long, value_name = "BUTTONS", requires = "buttons")]
+    open_front: Option<std::num::NonZeroUsize>,
+    /// Where --open-front writes its button pairs: JSON `[[a, b], ...]`, 0-based vertex
+    /// indices, as `weft simulate --buttons` and `weft animate --buttons` read them.
+    #[arg(long, value_name = "PAIRS.json", requires = "open_front")]
+    buttons: Option<PathBuf>,
 }
 
 /// The garment to prepare and the body it is on.
@@ -230,12 +238,30 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
         );
     }
     let fit = FitBody::new(&model, &betas).with_context(|| format!("{name}: fitting"))?;
-    let garment = fit.generate(kind, &style, vertices)?;
+    let mut garment = fit.generate(kind, &style, vertices)?;
     let fitted_to = name;
+    let mut buttons = None;
+    if let (Some(count), Some(path)) = (a.open_front, &a.buttons) {
+        let open = garment
+            .open_front(count.get())
+            .with_context(|| format!("--open-front {count}"))?;
+        garment = open.garment;
+        buttons = Some((path, open.buttons));
+    }
+    // The garment first: a buttons file never points into a garment that was not written.
     weft_garment::obj::write_obj(&a.out, &garment)?;
+    if let Some((path, pairs)) = &buttons {
+        let text = serde_json::to_string(pairs)?;
+        weft_mesh::io::write_atomic(path, |w| w.write_all(text.as_bytes()))
+            .with_context(|| format!("--buttons {}: cannot write", path.display()))?;
+    }
     let openings = Topology::new(&garment.mesh).boundary_loops().len();
+    let buttoned = match &buttons {
+        Some((path, pairs)) => format!(", {} button pairs in {}", pairs.len(), path.display()),
+        None => String::new(),
+    };
     emit(&format!(
-        "wrote {}: {} with {} vertices, {} faces, {} openings, fitted to {}",
+        "wrote {}: {} with {} vertices, {} faces, {} openings, fitted to {}{buttoned}",
         a.out.display(),
         kind.name(),
         garment.mesh.vertex_count(),

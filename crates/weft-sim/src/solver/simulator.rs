@@ -366,14 +366,19 @@ mod tests {
         let model = ClothModel::uniform(&rest, &Material::cotton(), SimOptions::default()).unwrap();
         let corners = [(nx * nx - nx) as u32, (nx * nx - 1) as u32];
         let buttoned = model.with_buttons(&[corners]).unwrap();
+        // The stiffness is the fabric's E t: 1 050 N/m for cotton.
+        let cotton = Material::cotton();
         let k = buttoned.buttons().unwrap().stiffness()[0];
-        assert!(k > 1.0 && k.is_finite(), "{k}");
+        let et = cotton.young_modulus * cotton.thickness;
+        assert!((k - et).abs() < 1e-9 * et, "{k} vs {et}");
         assert!(buttoned
             .with_buttons(&[[0, nx as u32 * nx as u32]])
             .is_err());
         // A material change keeps the pairs and rescales the stiffness.
         let silk = buttoned.with_material(&Material::silk()).unwrap();
         assert_eq!(silk.buttons().unwrap().pairs(), &[corners]);
+        let silk_et = Material::silk().young_modulus * Material::silk().thickness;
+        assert!((silk.buttons().unwrap().stiffness()[0] - silk_et).abs() < 1e-9 * silk_et);
         let gap = |sim: &ClothSimulator| {
             let x = sim.positions();
             (v3(x[corners[0] as usize]) - v3(x[corners[1] as usize])).norm()
