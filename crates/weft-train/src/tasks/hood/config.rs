@@ -59,6 +59,11 @@ pub struct HoodTraining {
     /// Share of samples whose garment is made of two materials, split by a random plane
     /// (HOOD's training never sees heterogeneous materials; run-time maps need it).
     pub two_materials: f64,
+    /// Share of samples whose garment is opened down the front (weft-garment's
+    /// `Garment::open_front`, with [`OPEN_FRONT_BUTTONS`] button pairs) and buttoned or
+    /// not with even odds, so that button edges and the buttons term are not first seen
+    /// at run time (HOOD never trains on them). 0: every garment closed, as HOOD.
+    pub open_front: f64,
     /// Pool each sample's hierarchy around a centre drawn among each garment component's
     /// minimum-eccentricity vertices (HOOD's code; its augmentation of the levels), not
     /// always the first of them as inference does.
@@ -119,6 +124,7 @@ impl HoodTraining {
             collision_start: 0.01,
             collision_ramp: [0.33, 0.66],
             two_materials: 0.25,
+            open_front: 0.0,
             random_centres: true,
             solver_weight: 0.0,
             validation_scenes: 4,
@@ -207,6 +213,7 @@ impl HoodTraining {
         for (field, v) in [
             ("train.settle_probability", self.settle_probability),
             ("train.two_materials", self.two_materials),
+            ("train.open_front", self.open_front),
         ] {
             if !(0.0..=1.0).contains(&v) {
                 return Err(TrainError::config(field, v, "between 0 and 1"));
@@ -252,6 +259,10 @@ impl HoodTraining {
 
 /// The collision ramp is taken in this many steps.
 pub const COLLISION_LEVELS: usize = 8;
+
+/// Button pairs down the front of an open-front training garment
+/// ([`HoodTraining::open_front`]): a shirt's worth.
+pub const OPEN_FRONT_BUTTONS: usize = 6;
 
 impl Default for HoodTraining {
     fn default() -> Self {

@@ -35,7 +35,7 @@ use std::sync::Arc;
 
 use burn::tensor::{Device, Tensor};
 use weft_body::{BodyModel, Pose};
-use weft_garment::{FitBody, GarmentKind, Style};
+use weft_garment::{FitBody, Garment, GarmentKind, Style};
 use weft_mesh::eccentricity::component_center_sets;
 use weft_mesh::rng::SplitMix64;
 use weft_mesh::TriMesh;
@@ -48,7 +48,7 @@ use weft_models::Clip;
 use weft_motion::{MotionKind, ProceduralParams};
 use weft_sim::{sample_hood_material, Attachment, Energy, Material, StepInputs};
 
-pub use config::{HoodRun, HoodTraining, COLLISION_LEVELS};
+pub use config::{HoodRun, HoodTraining, COLLISION_LEVELS, OPEN_FRONT_BUTTONS};
 
 use crate::error::{Result, TrainError};
 use crate::loss::{physics_loss, FrameEnergies, PhysicsImpl, PotentialTerm};
@@ -152,6 +152,26 @@ struct PoolGarment {
     betas: Vec<f32>,
     /// Each component's minimum-eccentricity vertices (the centres a sample draws from).
     centres: Vec<Vec<u32>>,
+    /// The same garment opened down the front, when `[train] open_front` > 0.
+    open: Option<OpenGarment>,
+}
+
+/// A pool garment cut down the front, with its button pairs.
+#[derive(Clone, Debug)]
+struct OpenGarment {
+    mesh: TriMesh,
+    buttons: Vec<[u32; 2]>,
+    centres: Vec<Vec<u32>>,
+}
+
+impl PoolGarment {
+    /// The mesh a sample uses and its centre sets: the open variant for an open sample.
+    fn variant(&self, open: bool) -> (&TriMesh, &[Vec<u32>]) {
+        match (&self.open, open) {
+            (Some(o), true) => (&o.mesh, &o.centres),
+            _ => (&self.mesh, &self.centres),
+        }
+    }
 }
 
 /// A motion of the pool.
@@ -177,6 +197,9 @@ struct Sample {
     /// The hierarchy's centre in each garment component (`[train] random_centres`);
     /// none: the first minimum-eccentricity vertex, as inference takes it.
     centres: Option<Vec<u32>>,
+    /// The garment opened down the front (`[train] open_front`), and whether it is
+    /// buttoned; `None`: the closed garment.
+    open: Option<bool>,
 }
 
 impl Sample {
@@ -261,11 +284,25 @@ fn garment_pool(
     for betas in shapes {
         for name in &training.garments {
             for s in 0..training.styles {
-                let mesh = garment_on(training, body, betas, name, seed.wrapping_add(s as u64))?;
+                let garment = garment_on(training, body, betas, name, seed.wrapping_add(s as u64))?;
+                let open = if training.open_front > 0.0 {
+                    let open = garment.open_front(OPEN_FRONT_BUTTONS).map_err(|e| {
+                        TrainError::config("train.open_front", training.open_front, &e.to_string())
+                    })?;
+                    Some(OpenGarment {
+                        centres: component_center_sets(&open.garment.mesh.graph()),
+                        mesh: open.garment.mesh,
+                        buttons: open.buttons,
+                    })
+                } else {
+                    None
+                };
+                let mesh = garment.mesh;
                 out.push(PoolGarment {
                     centres: component_center_sets(&mesh.graph()),
                     mesh,
                     betas: betas.clone(),
+                    open,
                 });
             }
         }
@@ -281,21 +318,19 @@ fn garment_on(
     betas: &[f32],
     kind: &str,
     style_seed: u64,
-) -> Result<TriMesh> {
+) -> Result<Garment> {
     let b64: Vec<f64> = betas.iter().map(|&b| f64::from(b)).collect();
     let fit = FitBody::new(body, &b64).map_err(|e| {
         TrainError::config("train.shape_range", training.shape_range, &e.to_string())
     })?;
     let parsed = GarmentKind::parse(kind)
         .map_err(|e| TrainError::config("train.garments", kind, &e.to_string()))?;
-    Ok(fit
-        .generate(
-            parsed,
-            &Style::from_seed(parsed, style_seed),
-            training.garment_vertices,
-        )
-        .map_err(|e| TrainError::config("train.garments", kind, &e.to_string()))?
-        .mesh)
+    fit.generate(
+        parsed,
+        &Style::from_seed(parsed, style_seed),
+        training.garment_vertices,
+    )
+    .map_err(|e| TrainError::config("train.garments", kind, &e.to_string()))
 }
 
 /// The motion pool: each procedural kind (seeded) and each motion file.
@@ -434,18 +469,21 @@ impl HoodTask {
         let frames = self.motions[motion].poses.len();
         // The window: frame `first` (t − 1), the start `first + 1`, and `rollout` more.
         let first = rng.below(frames - rollout - 1);
+        // No draw without open garments, so runs without them keep their samples.
+        let open = (self.training.open_front > 0.0 && rng.unit() < self.training.open_front)
+            .then(|| rng.unit() < 0.5);
+        let (mesh, centre_sets) = self.garments[garment].variant(open.is_some());
         let a = sample_hood_material(&mut rng);
         let materials = if rng.unit() < self.training.two_materials {
             let b = sample_hood_material(&mut rng);
-            two_materials(&self.garments[garment].mesh, a, b, &mut rng)
+            two_materials(mesh, a, b, &mut rng)
         } else {
             Materials::Uniform(a)
         };
         let at_rest = rollout > 1 || rng.unit() < self.training.settle_probability;
         let noise_seed = rng.next_u64();
         let centres = self.training.random_centres.then(|| {
-            self.garments[garment]
-                .centres
+            centre_sets
                 .iter()
                 .map(|set| set[rng.below(set.len())])
                 .collect()
@@ -458,6 +496,7 @@ impl HoodTask {
             at_rest,
             noise_seed,
             centres,
+            open,
         }
     }
 
@@ -473,8 +512,9 @@ impl HoodTask {
             trans: &m.trans[s.first..end],
             fps: m.fps,
         };
+        let (mesh, _) = g.variant(s.open.is_some());
         let mut scene = Scene::new(
-            &g.mesh,
+            mesh,
             &self.body,
             &clip,
             &s.materials,
@@ -483,6 +523,9 @@ impl HoodTask {
         )?;
         if let Some(centres) = &s.centres {
             scene.garment = scene.garment.recentred(centres)?;
+        }
+        if let (Some(true), Some(open)) = (s.open, &g.open) {
+            scene = scene.with_buttons(&open.buttons)?;
         }
         Ok(scene)
     }
@@ -496,7 +539,7 @@ impl HoodTask {
         for (k, betas) in shapes.iter().enumerate() {
             let kind = &self.training.garments[k % self.training.garments.len()];
             let style = self.seed.wrapping_add(1000 + k as u64);
-            let mesh = garment_on(&self.training, &self.body, betas, kind, style)?;
+            let mesh = garment_on(&self.training, &self.body, betas, kind, style)?.mesh;
             let m = &self.motions[k % self.motions.len()];
             let end = self.training.validation_frames.min(m.poses.len());
             let clip = Clip {
@@ -830,7 +873,14 @@ mod tests {
 
     /// One 300-vertex skirt on one body, a short walk.
     fn task(random_centres: bool) -> HoodTask {
-        let training = HoodTraining {
+        task_with(HoodTraining {
+            random_centres,
+            ..small()
+        })
+    }
+
+    fn small() -> HoodTraining {
+        HoodTraining {
             garments: vec!["skirt".into()],
             styles: 1,
             shapes: 1,
@@ -840,9 +890,11 @@ mod tests {
             max_rollout: 2,
             validation_scenes: 1,
             validation_frames: 5,
-            random_centres,
             ..HoodTraining::cpu()
-        };
+        }
+    }
+
+    fn task_with(training: HoodTraining) -> HoodTask {
         let config = HoodConfig {
             levels: 3,
             ..HoodConfig::preset("cpu").unwrap()
@@ -890,5 +942,42 @@ mod tests {
         let c = component_center_sets(&t.garments[0].mesh.graph());
         let first = default.clone().recentred(&[c[0][0]]).unwrap();
         assert_eq!(default.levels[..2], first.levels[..2]);
+    }
+
+    /// `[train] open_front`: samples draw the skirt opened down the front, buttoned with
+    /// even odds; a buttoned sample's scene has the button edges and a buttons term of
+    /// positive energy once the pairs are pulled apart, an unbuttoned one neither. Off
+    /// (the default), no garment is opened.
+    #[test]
+    fn open_front_samples_train_buttoned_and_unbuttoned() {
+        let t = task_with(HoodTraining {
+            open_front: 1.0,
+            ..small()
+        });
+        let open = t.garments[0].open.as_ref().unwrap();
+        assert_eq!(open.buttons.len(), OPEN_FRONT_BUTTONS);
+        assert!(open.mesh.vertex_count() > t.garments[0].mesh.vertex_count());
+        let (mut buttoned, mut unbuttoned) = (0, 0);
+        for item in 0..16 {
+            let s = t.sample(item, 1);
+            let scene = t.scene(&s, 3).unwrap();
+            assert_eq!(scene.garment.rest.vertex_count(), open.mesh.vertex_count());
+            if s.open == Some(true) {
+                buttoned += 1;
+                assert_eq!(scene.garment.buttons.len(), 2 * OPEN_FRONT_BUTTONS);
+                let springs = scene.cloth.buttons().unwrap();
+                let mut x = open.mesh.positions.clone();
+                let [a, _] = springs.pairs()[0];
+                x[a as usize][0] += 0.01;
+                assert!(springs.value(&x).unwrap() > 0.0);
+            } else {
+                unbuttoned += 1;
+                assert!(scene.garment.buttons.is_empty() && scene.cloth.buttons().is_none());
+            }
+        }
+        assert!(buttoned > 0 && unbuttoned > 0, "{buttoned} / {unbuttoned}");
+        let closed = task(true);
+        assert!(closed.garments[0].open.is_none());
+        assert_eq!(closed.sample(3, 1).open, None);
     }
 }
