@@ -42,9 +42,9 @@ fn main() -> ExitCode {
         }
     };
     // Every command that runs a network allocates and frees megabyte tensors per step;
-    // glibc's defaults page them back in each time (HOOD's paper network: 515 → 389 ms per
-    // step, docs/benchmarks.md). `WEFT_MALLOC_DEFAULTS=1` keeps glibc's defaults, for
-    // measuring the difference.
+    // glibc's defaults page them back in each time (HOOD's paper step at 4 000 vertices:
+    // 449–473 → 358–363 ms, docs/benchmarks.md). `WEFT_MALLOC_DEFAULTS=1` keeps glibc's
+    // defaults, for measuring the difference.
     if std::env::var_os("WEFT_MALLOC_DEFAULTS").is_none() {
         weft_nn::backend::retain_freed_memory();
     }

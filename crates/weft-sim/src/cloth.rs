@@ -12,10 +12,10 @@
 //! `E(x) = stretching + bending + gravity + inertia(x̂, h) + collision(k_c) + friction
 //! [+ buttons]`,
 //!
-//! every term with weight 1, in that order (buttons only while the garment has some,
-//! [`ClothModel::with_buttons`]) (`k_c` is the collision term's stiffness). Minimising it over the end-of-step positions
-//! is one implicit-Euler step (what the simulator does); its value and gradient at a
-//! network's predicted positions are HOOD's loss.
+//! every term with weight 1, in that order, the buttons only while the garment has some
+//! ([`ClothModel::with_buttons`]); `k_c` is the collision term's stiffness. Minimising it
+//! over the end-of-step positions is one implicit-Euler step (what the simulator does);
+//! its value and gradient at a network's predicted positions are HOOD's loss.
 //!
 //! The stretching and bending terms share their data with the model (`Arc`), so building
 //! a step's potential copies only the masses twice (gravity and inertia) and takes the
