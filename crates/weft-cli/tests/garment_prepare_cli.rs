@@ -262,6 +262,24 @@ fn generate_opens_a_top_down_the_front() {
         assert!(p != q && (q as usize) < b.mesh.vertex_count());
         assert_eq!(b.mesh.positions[p as usize], b.mesh.positions[q as usize]);
     }
+    // Buttons that cannot be written (their directory is a file) take the garment back.
+    let blocked = file(&dir, "blocked.obj");
+    let e = fails(
+        &[
+            &base[..],
+            &[
+                "--out",
+                &blocked,
+                "--open-front",
+                "4",
+                "--buttons",
+                &format!("{closed}/pairs.json"),
+            ],
+        ]
+        .concat(),
+    );
+    assert!(e.contains("--buttons"), "{e}");
+    assert!(!Path::new(&blocked).exists());
     let e = fails(&[&base[..], &["--out", &open, "--open-front", "4"]].concat());
     assert!(e.contains("--buttons"), "{e}");
     let e = fails(&[&base[..], &["--out", &open, "--buttons", &pairs]].concat());

@@ -248,12 +248,15 @@ fn run_generate(a: &GenerateArgs) -> Result<()> {
         garment = open.garment;
         buttons = Some((path, open.buttons));
     }
-    // The garment first: a buttons file never points into a garment that was not written.
+    // The garment first: a buttons file never points into a garment that was not written,
+    // and a garment whose buttons could not be written is taken back.
     weft_garment::obj::write_obj(&a.out, &garment)?;
     if let Some((path, pairs)) = &buttons {
         let text = serde_json::to_string(pairs)?;
-        weft_mesh::io::write_atomic(path, |w| w.write_all(text.as_bytes()))
-            .with_context(|| format!("--buttons {}: cannot write", path.display()))?;
+        if let Err(e) = weft_mesh::io::write_atomic(path, |w| w.write_all(text.as_bytes())) {
+            let _ = std::fs::remove_file(&a.out);
+            return Err(e).with_context(|| format!("--buttons {}: cannot write", path.display()));
+        }
     }
     let openings = Topology::new(&garment.mesh).boundary_loops().len();
     let buttoned = match &buttons {
