@@ -15,7 +15,7 @@ pub struct OpenFront {
     /// The garment, cut: the original vertices (same indices) and one copy per vertex
     /// of the cut; faces, UVs, kind and style as before.
     pub garment: Garment,
-    /// `[left, right]` vertex pairs across the cut, evenly spaced along it from the
+    /// `[original, copy]` vertex pairs across the cut, evenly spaced along it from the
     /// neckline down (the button positions).
     pub buttons: Vec<[u32; 2]>,
     /// Every pair the cut separated, neckline to hem.
@@ -25,14 +25,14 @@ pub struct OpenFront {
 impl Garment {
     /// This garment cut open down the front with `buttons` button pairs across the cut.
     ///
-    /// The cut runs along the shortest chain of edges from the frontmost vertex (+z, the
+    /// The cut follows the shortest chain of edges from the frontmost vertex (+z, the
     /// body's front) of the highest opening, the neckline, to the frontmost vertex of
-    /// the lowest one, the hem, and splits every vertex on it from the second one off the
-    /// neckline: the collar stays closed over one edge, the neckline stays an opening of
-    /// its own, and the front edges join the hem's. Buttons sit at `(i + ½)/buttons` of the cut's
-    /// length.
-    /// Errors on a garment with fewer than two openings (nothing to cut between) or
-    /// no button.
+    /// the lowest one, the hem. It starts at the chain's first vertex off every opening,
+    /// which stays whole (the collar stays closed over one edge and the neckline stays an
+    /// opening of its own), and ends at the next vertex on an opening, the hem, so the
+    /// front edges join the hem's opening. Buttons sit nearest `(i + ½)/buttons` of the
+    /// cut's length (fewer when the cut has fewer vertices). Errors on a garment with
+    /// fewer than two openings, a neckline that touches the hem, or no button.
     pub fn open_front(&self, buttons: usize) -> Result<OpenFront, GarmentError> {
         let refuse = |why: String| GarmentError::OpenFront(why);
         if buttons == 0 {
@@ -65,13 +65,10 @@ impl Garment {
         };
         let cut_error = |e: weft_mesh::cut::CutError| refuse(e.to_string());
         let full = shortest_path(mesh, front(neck), front(hem)).map_err(cut_error)?;
-        // Leave the neckline's own vertices out: the slit then ends inside the mesh, so
-        // the collar stays closed over the cut's first edge and the neckline stays its
-        // own opening, the one the simulator holds on the body (`Attachment::TopOpening`
-        // would otherwise take whichever opening is highest, e.g. a cuff).
-        // The path may run along an opening's edge at either end: it starts at its last
-        // vertex on an opening near the neckline (left whole) and ends at its first one
-        // on the hem.
+        // Leave the neckline's own vertices out: the slit then ends inside the mesh, and
+        // the neckline stays the opening the simulator holds on the body
+        // (`Attachment::TopOpening` would otherwise take whichever opening is highest,
+        // e.g. a cuff). The chain may also run along an opening's edge at either end.
         let mut on_boundary = vec![false; mesh.vertex_count()];
         for &v in loops.iter().flatten() {
             on_boundary[v as usize] = true;
