@@ -17,13 +17,16 @@ type Simulated<'py> = (Bound<'py, PyArray3<f32>>, Vec<Bound<'py, PyDict>>);
 /// Simulates `garment` (fitted to the body at `betas`, rest pose) on `body` (default:
 /// weft's) following `motion`. `material` is a preset name (hood, silk, cotton, jersey,
 /// denim, leather); `attach` "top" holds the waistband or neckline on the skin, "none"
-/// leaves contact and friction alone; `pinned` adds vertex indices held on the skin.
+/// leaves contact and friction alone; `pinned` adds vertex indices held on the skin;
+/// `buttons` are vertex pairs `(a, b)` held together (a spring as stiff as the fabric)
+/// until output frame `unbutton_at`, if given.
 /// Returns `(frames, stats)`: positions `float32` `(T, N, 3)` and one dict per frame
 /// (seconds, Newton and CG iterations, edge strain, penetration). The GIL is released
 /// while it runs.
 #[pyfunction]
 #[pyo3(signature = (garment, motion, material="cotton", body=None, betas=Vec::new(),
-    substeps=4, warmup=15, frames=None, attach="top", pinned=Vec::new()))]
+    substeps=4, warmup=15, frames=None, attach="top", pinned=Vec::new(), buttons=Vec::new(),
+    unbutton_at=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate<'py>(
     py: Python<'py>,
@@ -37,6 +40,8 @@ pub fn simulate<'py>(
     frames: Option<usize>,
     attach: &str,
     pinned: Vec<u32>,
+    buttons: Vec<[u32; 2]>,
+    unbutton_at: Option<usize>,
 ) -> PyResult<Simulated<'py>> {
     let material = Material::preset(material).map_err(value_error)?;
     let attachment = match attach {
@@ -54,6 +59,8 @@ pub fn simulate<'py>(
         max_frames: frames,
         attachment,
         pinned,
+        buttons,
+        unbutton_at,
         ..SequenceOptions::default()
     };
     let model = model_of(body)?;

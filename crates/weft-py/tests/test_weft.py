@@ -99,6 +99,21 @@ def test_simulate_then_import_and_load(skirt, walk, body, tmp_path):
     # The skirt walks forward with the body (+Z).
     assert frames[-1, :, 2].mean() > frames[0, :, 2].mean() + 0.02
 
+    # Two hem vertices across the skirt buttoned together come close; unbuttoned from
+    # frame 1 they part again. A pair out of range is a ValueError, not a crash.
+    hem = np.flatnonzero(skirt.positions[:, 1] < skirt.positions[:, 1].min() + 1e-3)
+    a = hem[0]
+    b = hem[np.argmax(np.linalg.norm(skirt.positions[hem] - skirt.positions[a], axis=1))]
+    held, _ = weft.simulate(skirt, walk, material="silk", substeps=2, warmup=6, buttons=[(a, b)])
+    undone, _ = weft.simulate(
+        skirt, walk, material="silk", substeps=2, warmup=6, buttons=[(a, b)], unbutton_at=1
+    )
+    gap = lambda f: np.linalg.norm(f[:, a] - f[:, b], axis=1)
+    assert gap(held)[0] < 0.5 * np.linalg.norm(skirt.positions[a] - skirt.positions[b])
+    assert gap(undone)[-1] > 1.5 * gap(held)[-1]
+    with pytest.raises(ValueError, match="button"):
+        weft.simulate(skirt, walk, buttons=[(0, 10**6)])
+
     # The simulation as a dataset, through the import every weft model trains on.
     skirt.save(tmp_path / "skirt.obj")
     walk.save(tmp_path / "walk.npz")

@@ -83,6 +83,8 @@ def simulate(
     frames: Optional[int] = None,
     attach: str = "top",
     pinned: Sequence[int] = ...,
+    buttons: Sequence[Tuple[int, int]] = ...,
+    unbutton_at: Optional[int] = None,
 ) -> Tuple[_F32, list[dict[str, Any]]]: ...
 def render(
     meshes: Sequence[Tuple[npt.ArrayLike, npt.ArrayLike] | Tuple[npt.ArrayLike, npt.ArrayLike, Tuple[int, int, int]]],
