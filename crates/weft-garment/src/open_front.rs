@@ -6,6 +6,7 @@
 use weft_mesh::cut::{cut_along, shortest_path};
 use weft_mesh::vec3::dist;
 use weft_mesh::Topology;
+use weft_sim::attachment::top_opening;
 
 use crate::{Garment, GarmentError};
 
@@ -52,9 +53,12 @@ impl Garment {
                 .sum::<f64>()
                 / l.len() as f64
         };
-        let by_height = |a: &&Vec<u32>, b: &&Vec<u32>| height(a).total_cmp(&height(b));
-        let neck = loops.iter().max_by(by_height).unwrap_or(&loops[0]);
-        let hem = loops.iter().min_by(by_height).unwrap_or(&loops[0]);
+        // The neckline is the opening the simulator holds on the body.
+        let neck = top_opening(mesh);
+        let hem = loops
+            .iter()
+            .min_by(|a, b| height(a).total_cmp(&height(b)))
+            .unwrap_or(&loops[0]);
         let front = |l: &Vec<u32>| {
             l.iter()
                 .copied()
@@ -64,7 +68,7 @@ impl Garment {
                 .unwrap_or(l[0])
         };
         let cut_error = |e: weft_mesh::cut::CutError| refuse(e.to_string());
-        let full = shortest_path(mesh, front(neck), front(hem)).map_err(cut_error)?;
+        let full = shortest_path(mesh, front(&neck), front(hem)).map_err(cut_error)?;
         // Leave the neckline's own vertices out: the slit then ends inside the mesh, and
         // the neckline stays the opening the simulator holds on the body
         // (`Attachment::TopOpening` would otherwise take whichever opening is highest,
@@ -122,23 +126,6 @@ impl Garment {
 mod tests {
     use crate::{generate, GarmentKind, Measurements, Style};
 
-    /// The opening with the highest mean height (what the simulator pins), sorted.
-    fn top_opening(mesh: &weft_mesh::TriMesh) -> Vec<u32> {
-        let mean = |l: &Vec<u32>| {
-            l.iter()
-                .map(|&v| mesh.positions[v as usize][1])
-                .sum::<f64>()
-                / l.len() as f64
-        };
-        let mut top = weft_mesh::Topology::new(mesh)
-            .boundary_loops()
-            .into_iter()
-            .max_by(|a, b| mean(a).total_cmp(&mean(b)))
-            .unwrap();
-        top.sort_unstable();
-        top
-    }
-
     /// A long-sleeved top opened down the front: one copy per cut vertex, the cut from
     /// below the neckline to the hem down the front, buttons in order from the top, and
     /// as many openings as before (the front edges join the hem's; the neckline stays
@@ -177,8 +164,13 @@ mod tests {
         assert!(y.windows(2).all(|w| w[0] > w[1]), "{y:?}");
         let loops = |mesh| weft_mesh::Topology::new(mesh).boundary_loops().len();
         assert_eq!(loops(m), loops(&g.mesh));
-        let neck = top_opening(&g.mesh);
-        assert_eq!(top_opening(m), neck);
+        let sorted = |mut v: Vec<u32>| {
+            v.sort_unstable();
+            v
+        };
+        // The simulator still pins the neckline, unchanged.
+        let neck = sorted(weft_sim::attachment::top_opening(&g.mesh));
+        assert_eq!(sorted(weft_sim::attachment::top_opening(m)), neck);
         assert!(g.open_front(0).is_err());
     }
 }

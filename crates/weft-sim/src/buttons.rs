@@ -11,9 +11,28 @@
 use nalgebra::Matrix3;
 
 use crate::energy::{Energy, HessianKind};
-use crate::error::{check_eval, check_len, check_nonneg, check_vertex, Output, SimError};
+use crate::error::{check_eval, check_len, check_nonneg, Output, SimError};
 use crate::math::axpy3;
 use crate::sparse::BlockCsr;
+
+/// Checks button `pairs` against a garment of `vertex_count` vertices: every vertex in
+/// range, none paired with itself. The one check of every place that takes pairs (the
+/// simulator, HOOD's graph, the commands), so they refuse the same pairs alike.
+pub fn check_pairs(pairs: &[[u32; 2]], vertex_count: usize) -> Result<(), SimError> {
+    match pairs
+        .iter()
+        .enumerate()
+        .find(|(_, &[a, b])| a == b || a as usize >= vertex_count || b as usize >= vertex_count)
+    {
+        Some((index, &[a, b])) => Err(SimError::ButtonPair {
+            index,
+            a,
+            b,
+            vertex_count,
+        }),
+        None => Ok(()),
+    }
+}
 
 /// Zero-length springs between button vertex pairs.
 #[derive(Clone, Debug)]
@@ -33,16 +52,7 @@ impl Buttons {
         stiffness: Vec<f64>,
     ) -> Result<Self, SimError> {
         check_len("button stiffnesses", pairs.len(), stiffness.len())?;
-        for (p, &[a, b]) in pairs.iter().enumerate() {
-            check_vertex("button pair", p, a, vertex_count)?;
-            check_vertex("button pair", p, b, vertex_count)?;
-            if a == b {
-                return Err(SimError::InvalidVector {
-                    what: format!("button pair {p} ({a}, {b})"),
-                    message: "pairs a vertex with itself",
-                });
-            }
-        }
+        check_pairs(&pairs, vertex_count)?;
         for (p, &k) in stiffness.iter().enumerate() {
             check_nonneg(|| format!("stiffness of button pair {p}"), k, true)?;
         }

@@ -187,6 +187,7 @@ impl ClothModel {
             return Ok(self.without_buttons());
         }
         let n = self.vertex_count();
+        crate::buttons::check_pairs(pairs, n)?;
         let (mut sum, mut count) = (vec![0.0; n], vec![0usize; n]);
         for (face, p) in self.rest.faces.iter().zip(self.stretch.params()) {
             let k = 4.0 * p.mu * (p.lambda + p.mu) / (p.lambda + 2.0 * p.mu) * p.thickness;
@@ -197,18 +198,13 @@ impl ClothModel {
         }
         let mut stiffness = Vec::with_capacity(pairs.len());
         for &[a, b] in pairs {
-            let ends = [a, b].map(|v| v as usize).map(|v| {
-                (
-                    sum.get(v).copied().unwrap_or(0.0),
-                    count.get(v).copied().unwrap_or(0),
-                )
-            });
-            let faces = ends[0].1 + ends[1].1;
+            let (a, b) = (a as usize, b as usize);
+            let faces = count[a] + count[b];
             // A vertex on no face has no fabric to borrow from: `Buttons::new` refuses 0.
             stiffness.push(if faces == 0 {
                 0.0
             } else {
-                (ends[0].0 + ends[1].0) / faces as f64
+                (sum[a] + sum[b]) / faces as f64
             });
         }
         Ok(ClothModel {

@@ -40,6 +40,20 @@ pub enum SimError {
         /// The mesh's vertex count.
         vertex_count: usize,
     },
+    /// A button pair names a vertex outside the garment or the same vertex twice.
+    #[error(
+        "button pair {index} ({a}, {b}): expected two different vertices below {vertex_count}"
+    )]
+    ButtonPair {
+        /// The pair's index.
+        index: usize,
+        /// Its first vertex.
+        a: u32,
+        /// Its second vertex.
+        b: u32,
+        /// The garment's vertex count.
+        vertex_count: usize,
+    },
     /// A rest triangle (from positions or UVs) has (almost) no area, so it has no rest
     /// frame; remove it or fix the rest shape.
     #[error("face {face}: degenerate rest triangle (area {area:e}); remove or repair it")]

@@ -429,7 +429,6 @@ pub fn simulate_sequence(
     // The rest shape stays the garment as given (translation does not change it).
     let model = ClothModel::uniform(garment, material, opts.sim)?.with_buttons(&opts.buttons)?;
     let mut sim = ClothSimulator::from_model(model)?;
-    let mut unbuttoned = opts.buttons.is_empty();
     let zero = vec![[0.0; 3]; start.positions.len()];
     sim.set_state(start.positions.clone(), zero)?;
     let mut held = opts.attachment.vertices(garment);
@@ -467,9 +466,9 @@ pub fn simulate_sequence(
     }
     for k in 1..timeline.len() {
         let output = k.saturating_sub(first_output);
-        if !unbuttoned && k >= first_output && opts.unbutton_at.is_some_and(|f| output >= f) {
+        let buttoned = sim.model().buttons().is_some();
+        if buttoned && k >= first_output && opts.unbutton_at.is_some_and(|f| output >= f) {
             sim.unbutton();
-            unbuttoned = true;
         }
         let body_next = timeline.body(k)?;
         for s in 1..=opts.substeps {

@@ -108,17 +108,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         buttons: match &args.buttons {
             Some(path) => {
                 let pairs = super::cloth_args::buttons(path)?;
-                let n = garment.vertex_count();
-                if let Some((k, [a, b])) = pairs
-                    .iter()
-                    .enumerate()
-                    .find(|(_, &[a, b])| a == b || a as usize >= n || b as usize >= n)
-                {
-                    bail!(
-                        "--buttons {}: pair {k} ({a}, {b}): expected two different vertices below {n}, the garment's vertex count",
-                        path.display()
-                    );
-                }
+                weft_sim::buttons::check_pairs(&pairs, garment.vertex_count())
+                    .with_context(|| format!("--buttons {}", path.display()))?;
                 pairs
             }
             None => solver.buttons.clone(),

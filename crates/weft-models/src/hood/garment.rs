@@ -106,14 +106,8 @@ impl HoodGarment {
     /// Joins vertex pairs by button edges (they enter the mesh level's message passing
     /// while buttoned); errors on an index out of range or a vertex paired with itself.
     pub fn with_buttons(mut self, pairs: &[[u32; 2]]) -> Result<Self, ModelError> {
-        let n = self.vertex_count();
-        for (k, &[a, b]) in pairs.iter().enumerate() {
-            if a as usize >= n || b as usize >= n || a == b {
-                return Err(ModelError::Garment(format!(
-                    "button pair {k} ({a}, {b}): expected two different vertices below {n}"
-                )));
-            }
-        }
+        weft_sim::buttons::check_pairs(pairs, self.vertex_count())
+            .map_err(|e| ModelError::Garment(e.to_string()))?;
         self.buttons = pairs.iter().flat_map(|&[a, b]| [[a, b], [b, a]]).collect();
         Ok(self)
     }
