@@ -3,7 +3,7 @@
 //! open-front jacket (weft-garment's `open_front`), whose two edges can then be buttoned
 //! back together by vertex pairs (seed 004 Fig. 4).
 
-use crate::geodesic::Geodesics;
+use crate::geodesic::{GeodesicError, Geodesics};
 use crate::mesh::TriMesh;
 use crate::vec3::dist;
 
@@ -40,6 +40,10 @@ pub enum CutError {
         /// End.
         to: u32,
     },
+    /// The mesh itself is unusable for distances (a face out of range, a non-finite
+    /// position).
+    #[error("cannot measure paths on the mesh: {0}")]
+    Mesh(#[from] GeodesicError),
 }
 
 /// A mesh cut open, with the vertex pairs the cut separated.
@@ -163,7 +167,7 @@ pub fn shortest_path(mesh: &TriMesh, from: u32, to: u32) -> Result<Vec<u32>, Cut
             });
         }
     }
-    let geodesics = Geodesics::new(mesh).map_err(|_| CutError::Disconnected { from, to })?;
+    let geodesics = Geodesics::new(mesh)?;
     let d = geodesics.distances_from(from as usize);
     if !d[to as usize].is_finite() {
         return Err(CutError::Disconnected { from, to });
@@ -251,5 +255,18 @@ mod tests {
         assert!(p
             .windows(2)
             .all(|w| graph.neighbors(w[0] as usize).contains(&w[1])));
+    }
+
+    #[test]
+    fn shortest_path_names_a_broken_mesh_not_a_disconnection() {
+        let mut g = grid(4, 4, 1.0);
+        g.positions[5][0] = f64::NAN;
+        assert!(matches!(
+            shortest_path(&g, 1, 13),
+            Err(CutError::Mesh(GeodesicError::NonFinitePosition {
+                vertex: 5,
+                ..
+            }))
+        ));
     }
 }

@@ -23,7 +23,9 @@ pub struct DemoArgs {
     /// every stage in a minute; the figures it reports mean nothing.
     #[arg(long)]
     quick: bool,
-    /// Training steps, at least 1 (default: the cpu preset's).
+    /// Training steps, at least 1 (default 2 000: the cpu preset's schedule, shortened so
+    /// that a fresh clone reaches the report in about ten minutes; `weft train` runs
+    /// the preset's 3 000).
     #[arg(long)]
     steps: Option<std::num::NonZeroUsize>,
 }
