@@ -182,18 +182,29 @@ pub fn run_demo(
         &format!("training the cpu preset in {}", run_dir.display()),
     );
     let mut cfg = MultilevelRun::preset("cpu")?;
-    cfg.train.trainer.steps = opts
-        .steps
-        .unwrap_or(if opts.quick { 6 } else { DEMO_STEPS });
+    let resume = run_dir.join("checkpoints").join("latest").is_file();
+    // A run an earlier demo left keeps its own budget unless `--steps` says otherwise
+    // (versions before DEMO_STEPS trained 3 000): with another count the resume would be
+    // refused as a different run.
+    let earlier_steps = (resume && opts.steps.is_none())
+        .then(|| MultilevelRun::from_run_dir(&run_dir).ok())
+        .flatten()
+        .map(|run| run.train.trainer.steps);
+    cfg.train.trainer.steps =
+        opts.steps
+            .or(earlier_steps)
+            .unwrap_or(if opts.quick { 6 } else { DEMO_STEPS });
     if opts.quick {
         cfg.train.task.window = 3;
         cfg.train.trainer.checkpoint_every = 3;
         cfg.train.trainer.validate_every = 3;
         cfg.train.task.validation_windows = 1;
     }
-    let resume = run_dir.join("checkpoints").join("latest").is_file();
     if resume {
-        log("      resuming the run found there");
+        log(&format!(
+            "      resuming the run found there ({} steps)",
+            cfg.train.trainer.steps
+        ));
     }
     let options = RunOptions {
         resume,

@@ -13,10 +13,12 @@ use weft_pipeline::stand_in::StandInSimulator;
 fn quick_demo_runs_every_stage_and_resumes() {
     let out = std::env::temp_dir().join(format!("weft-pipeline-demo-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
+    // 4 steps, not the quick default of 6: the second run below, with no count given,
+    // must finish the run it finds rather than refuse it as another.
     let opts = DemoOptions {
         out: out.clone(),
         quick: true,
-        steps: None,
+        steps: Some(4),
     };
     let mut lines = Vec::new();
     let s = run_demo(&opts, &StandInSimulator, &Silent, &mut |l| {
@@ -50,9 +52,13 @@ fn quick_demo_runs_every_stage_and_resumes() {
         );
     }
     assert!(lines.iter().any(|l| l.starts_with("[5/5]")));
-    // A second run reuses the data and the finished training.
+    // A second run, with no step count, reuses the data and the finished training.
+    let again_opts = DemoOptions {
+        steps: None,
+        ..opts.clone()
+    };
     let mut again = Vec::new();
-    run_demo(&opts, &StandInSimulator, &Silent, &mut |l| {
+    run_demo(&again_opts, &StandInSimulator, &Silent, &mut |l| {
         again.push(l.to_owned())
     })
     .unwrap();
@@ -62,9 +68,19 @@ fn quick_demo_runs_every_stage_and_resumes() {
         again.join("\n")
     );
     assert!(
-        again.iter().any(|l| l.contains("resuming")),
+        again
+            .iter()
+            .any(|l| l.contains("resuming the run found there (4 steps)")),
         "{}",
         again.join("\n")
     );
+    // An explicit count that differs is a different run, refused naming the field.
+    let other = DemoOptions {
+        steps: Some(5),
+        ..opts.clone()
+    };
+    let err = run_demo(&other, &StandInSimulator, &Silent, &mut |_| {}).unwrap_err();
+    let cause = std::error::Error::source(&err).map_or(String::new(), |c| c.to_string());
+    assert!(cause.contains("steps"), "{err}: {cause}");
     let _ = std::fs::remove_dir_all(&out);
 }
