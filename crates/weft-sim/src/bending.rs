@@ -42,7 +42,7 @@ use weft_mesh::{Hinge, Topology, TriMesh};
 use crate::energy::{Energy, HessianKind};
 use crate::error::{check_count, check_eval, check_nonneg, check_vertex, Output, SimError};
 use crate::math::{axpy3, project_psd12, skew, v3};
-use crate::sparse::{BlockCsr, ElementSlots};
+use crate::sparse::{BlockCsr, GatherCache};
 
 /// How the per-hinge weight `w_e` is computed from the rest shape (in TOML: `hood`,
 /// `discrete_shells`).
@@ -82,13 +82,14 @@ struct HingeData {
 pub struct Bending {
     vertex_count: usize,
     hinges: Arc<[HingeData]>,
+    /// Where the hinges' Newton blocks go in the last matrix assembled into, shared by
+    /// the clones that every step's potential holds.
+    gather: Arc<GatherCache<4>>,
 }
 
 type V12 = SVector<f64, 12>;
 type M12 = SMatrix<f64, 12, 12>;
 type J = SMatrix<f64, 3, 12>;
-/// A hinge's Newton block and its storage slots.
-type HingeBlock = (M12, ElementSlots<4>);
 
 /// Orders a hinge's vertices as `[x0, x1, x2, x3]` with `x0 → x1` in the winding of the
 /// first face.
@@ -158,6 +159,7 @@ impl Bending {
         Ok(Bending {
             vertex_count: n,
             hinges: out.into(),
+            gather: Arc::default(),
         })
     }
 
@@ -395,38 +397,49 @@ impl Energy for Bending {
         hess: &mut BlockCsr,
     ) -> Result<(), SimError> {
         check_eval(self.vertex_count, x, Output::Hessian(hess.block_rows()))?;
-        // Hinge matrices (and their eigen-projections) in parallel, serial scatter.
-        let blocks: Vec<Result<Option<HingeBlock>, SimError>> = self
+        let gather = self
+            .gather
+            .get(hess, self.hinges.len(), |i| self.hinges[i].verts)?;
+        // Hinge blocks in parallel, then the parallel gather into the stored blocks. A
+        // degenerate hinge (no dihedral angle) adds nothing.
+        if kind == HessianKind::Surrogate {
+            // Gauss–Newton: `2kw ∇θ∇θᵀ`, rank one and PSD, exact at the rest angle; kept
+            // as `u = √(2kw) ∇θ` (12 numbers instead of 144).
+            let u: Vec<V12> = self
+                .hinges
+                .par_iter()
+                .map(|h| {
+                    let p = self.local(h, x);
+                    geometry(&p).map_or(V12::zeros(), |g| {
+                        angle_gradient(&g, &p) * (2.0 * h.coefficient).sqrt()
+                    })
+                })
+                .collect();
+            return hess.add_gathered(&gather, scale, |i, a, b| {
+                u[i].fixed_rows::<3>(3 * a) * u[i].fixed_rows::<3>(3 * b).transpose()
+            });
+        }
+        let m: Vec<M12> = self
             .hinges
             .par_iter()
             .map(|h| {
-                let slots = hess.element_slots(&h.verts)?;
                 let p = self.local(h, x);
                 let Some(g) = geometry(&p) else {
-                    return Ok(None);
+                    return M12::zeros();
                 };
                 let d = wrapped(g.theta, h.rest_angle);
                 let gt = angle_gradient(&g, &p);
-                let gauss_newton = gt * gt.transpose();
-                if kind == HessianKind::Surrogate {
-                    // Rank one and PSD; exact at the rest angle.
-                    return Ok(Some((gauss_newton * (2.0 * h.coefficient), slots)));
-                }
-                let m = (gauss_newton + angle_hessian(&g, &p) * d) * (2.0 * h.coefficient);
-                let m = if kind == HessianKind::Projected {
+                let m = (gt * gt.transpose() + angle_hessian(&g, &p) * d) * (2.0 * h.coefficient);
+                if kind == HessianKind::Projected {
                     project_psd12(&m)
                 } else {
                     m
-                };
-                Ok(Some((m, slots)))
+                }
             })
             .collect();
-        for b in blocks {
-            if let Some((m, slots)) = b? {
-                hess.add_element_at(&slots, &m, scale);
-            }
-        }
-        Ok(())
+        hess.add_gathered(&gather, scale, |i, a, b| {
+            m[i].fixed_view::<3, 3>(3 * a, 3 * b).into_owned()
+        })
     }
 
     fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {

@@ -78,5 +78,5 @@ pub use sequence::{
     SimulatedSequence, MAX_SUBSTEPS, MAX_WARMUP_FRAMES,
 };
 pub use solver::{ClothSimulator, NewtonOptions, SimOptions};
-pub use sparse::{BlockCsr, ElementSlots, PatternBuilder};
+pub use sparse::{BlockCsr, ElementGather, GatherCache, PatternBuilder};
 pub use stretch::{Stretch, StretchParams};

@@ -22,13 +22,10 @@ use weft_mesh::TriMesh;
 use crate::energy::HessianKind;
 use crate::error::{check_count, check_eval, check_len, check_vertex, Output, SimError};
 use crate::math::{finite3, project_psd6, project_psd9, v3};
-use crate::sparse::{BlockCsr, ElementSlots};
+use crate::sparse::{BlockCsr, GatherCache};
 
 /// `∂²ψ/∂F²` as a 6×6 matrix, entry `(k + 3j, l + 3m)` = `∂²ψ/∂F_kj ∂F_lm`.
 pub(crate) type FHessian = SMatrix<f64, 6, 6>;
-
-/// A face's Newton block and its storage slots.
-type FaceBlock = (SMatrix<f64, 9, 9>, ElementSlots<3>);
 
 /// Rest frames of all faces of a garment: per face the three `g_a` and the rest area.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,6 +34,8 @@ pub struct RestFrames {
     faces: Vec<[u32; 3]>,
     g: Vec<[[f64; 2]; 3]>,
     area: Vec<f64>,
+    /// Where the faces' Newton blocks go in the last matrix assembled into.
+    gather: GatherCache<3>,
 }
 
 /// Relative area below which a rest triangle has no usable frame.
@@ -157,6 +156,7 @@ impl RestFrames {
             faces,
             g,
             area,
+            gather: GatherCache::default(),
         })
     }
 
@@ -298,28 +298,27 @@ pub(crate) fn membrane_hessian<D: MembraneDensity + Sync>(
     hess: &mut BlockCsr,
 ) -> Result<(), SimError> {
     check_eval(frames.vertex_count, x, Output::Hessian(hess.block_rows()))?;
-    // Element matrices (and their eigen-projections, the bulk of the cost) and their
-    // storage slots in parallel; the serial scatter only adds.
-    let blocks: Vec<Result<FaceBlock, SimError>> = (0..frames.faces.len())
+    // Element matrices (and their eigen-projections, the bulk of the cost) in parallel,
+    // then the parallel gather into the stored blocks.
+    let blocks: Vec<SMatrix<f64, 9, 9>> = (0..frames.faces.len())
         .into_par_iter()
         .map(|f| {
             let fg = frames.deformation_gradient(f, x);
-            let slots = hess.element_slots(&frames.faces[f])?;
-            let h = match kind {
+            match kind {
                 HessianKind::Exact => frames.element_hessian(f, &d.stiffness(f, &fg)),
                 HessianKind::Projected => {
                     project_psd9(&frames.element_hessian(f, &d.stiffness(f, &fg)))
                 }
                 HessianKind::Surrogate => frames.element_hessian(f, &d.surrogate_stiffness(f, &fg)),
-            };
-            Ok((h, slots))
+            }
         })
         .collect();
-    for b in blocks {
-        let (h, slots) = b?;
-        hess.add_element_at(&slots, &h, scale);
-    }
-    Ok(())
+    let gather = frames
+        .gather
+        .get(hess, frames.faces.len(), |f| frames.faces[f])?;
+    hess.add_gathered(&gather, scale, |f, a, b| {
+        blocks[f].fixed_view::<3, 3>(3 * a, 3 * b).into_owned()
+    })
 }
 
 /// Calls `f` with every face.

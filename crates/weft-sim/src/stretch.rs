@@ -182,7 +182,7 @@ mod tests {
     use super::*;
     use crate::energy::{hessian_of, HessianKind};
     use crate::sparse::BlockCsr;
-    use crate::Bending;
+    use crate::{Bending, RestAngle};
     use weft_mesh::primitives::grid;
 
     fn min_max_eigen(h: &BlockCsr) -> (f64, f64) {
@@ -235,5 +235,16 @@ mod tests {
             lo >= -1e-10 * hi.max(1e-30),
             "bending surrogate eigenvalue {lo}"
         );
+        // At the rest angle the Gauss–Newton surrogate is the exact Hessian.
+        let bent = weft_mesh::TriMesh::new(folded.clone(), rest.faces.clone());
+        let b = Bending::uniform(&bent, 1e-3, Default::default(), RestAngle::FromRest).unwrap();
+        let exact = hessian_of(&b, &folded, HessianKind::Exact)
+            .unwrap()
+            .to_dense();
+        let surrogate = hessian_of(&b, &folded, HessianKind::Surrogate)
+            .unwrap()
+            .to_dense();
+        assert!(exact.norm() > 0.0);
+        assert!((&exact - &surrogate).norm() <= 1e-9 * exact.norm());
     }
 }

@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use crate::energy::{Energy, HessianKind};
 use crate::error::{check_count, check_eval, check_nonneg, check_vertex, Output, SimError};
 use crate::math::{finite3, project_psd9, skew, v3};
-use crate::sparse::BlockCsr;
+use crate::sparse::{BlockCsr, GatherCache};
 
 /// Per-face cone volumes about apexes, held at their rest values.
 #[derive(Clone, Debug)]
@@ -33,6 +33,8 @@ pub struct ConeVolume {
     stiffness: Vec<f64>,
     rest_volume: Vec<f64>,
     apex: Vec<[f64; 3]>,
+    /// Where the faces' Newton blocks go in the last matrix assembled into.
+    gather: GatherCache<3>,
 }
 
 /// `(V, ∇V)` of a face with corners `x` about `p`.
@@ -74,6 +76,7 @@ impl ConeVolume {
             faces,
             stiffness,
             apex: Vec::new(),
+            gather: GatherCache::default(),
         };
         e.set_apexes(apex)?;
         e.rest_volume = e.volumes(rest)?;
@@ -177,17 +180,12 @@ impl Energy for ConeVolume {
         let blocks: Vec<_> = (0..self.faces.len())
             .into_par_iter()
             .with_min_len(256)
-            .map(|f| {
-                Ok((
-                    self.face_hessian(f, x, kind),
-                    hess.element_slots(&self.faces[f])?,
-                ))
-            })
-            .collect::<Result<_, SimError>>()?;
-        for (h, slots) in blocks {
-            hess.add_element_at(&slots, &h, scale);
-        }
-        Ok(())
+            .map(|f| self.face_hessian(f, x, kind))
+            .collect();
+        let gather = self.gather.get(hess, self.faces.len(), |f| self.faces[f])?;
+        hess.add_gathered(&gather, scale, |f, a, b| {
+            blocks[f].fixed_view::<3, 3>(3 * a, 3 * b).into_owned()
+        })
     }
     fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
         for face in &self.faces {
