@@ -137,7 +137,7 @@ impl Energy for Buttons {
         Ok(())
     }
 
-    fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
+    fn for_each_stencil(&self, _kind: HessianKind, f: &mut dyn FnMut(&[u32])) {
         for pair in &self.pairs {
             f(pair);
         }

@@ -144,5 +144,5 @@ impl Energy for CubicCollision {
         }
         Ok(())
     }
-    fn for_each_stencil(&self, _f: &mut dyn FnMut(&[u32])) {}
+    fn for_each_stencil(&self, _kind: HessianKind, _f: &mut dyn FnMut(&[u32])) {}
 }

@@ -57,7 +57,7 @@ pub trait Energy {
     ) -> Result<f64, SimError>;
 
     /// Adds `scale · ∇²E(x)` (of the given kind) into `hess`, whose pattern must hold
-    /// this energy's stencils (see [`Energy::for_each_stencil`]).
+    /// this energy's stencils of that kind (see [`Energy::for_each_stencil`]).
     fn add_hessian(
         &self,
         x: &[[f64; 3]],
@@ -66,10 +66,11 @@ pub trait Energy {
         hess: &mut BlockCsr,
     ) -> Result<(), SimError>;
 
-    /// Calls `f` with the vertex set of every element that couples vertices (faces,
-    /// hinges). Per-vertex terms need not report anything: the diagonal is always in
-    /// the pattern.
-    fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32]));
+    /// Calls `f` with the vertex set of every element that couples vertices in the
+    /// Hessian of `kind` (faces, hinges). Per-vertex terms need not report anything:
+    /// the diagonal is always in the pattern. The kind matters where a surrogate
+    /// couples fewer vertices than the exact Hessian (bending).
+    fn for_each_stencil(&self, kind: HessianKind, f: &mut dyn FnMut(&[u32]));
 }
 
 /// A convenience: the gradient of `energy` at `x` in a fresh buffer, with the value.
@@ -82,10 +83,10 @@ pub fn gradient_of<E: Energy + ?Sized>(
     Ok((v, g))
 }
 
-/// A convenience: the sparsity pattern of `energy`'s Hessian, all values zero.
-pub fn hessian_pattern_of<E: Energy + ?Sized>(energy: &E) -> BlockCsr {
+/// A convenience: the sparsity pattern of `energy`'s Hessian of `kind`, all values zero.
+pub fn hessian_pattern_of<E: Energy + ?Sized>(energy: &E, kind: HessianKind) -> BlockCsr {
     let mut b = crate::sparse::PatternBuilder::new(energy.vertex_count());
-    energy.for_each_stencil(&mut |s| b.add(s));
+    energy.for_each_stencil(kind, &mut |s| b.add(s));
     b.build()
 }
 
@@ -95,7 +96,7 @@ pub fn hessian_of<E: Energy + ?Sized>(
     x: &[[f64; 3]],
     kind: HessianKind,
 ) -> Result<BlockCsr, SimError> {
-    let mut h = hessian_pattern_of(energy);
+    let mut h = hessian_pattern_of(energy, kind);
     energy.add_hessian(x, 1.0, kind, &mut h)?;
     Ok(h)
 }

@@ -113,7 +113,7 @@ impl Energy for Gravity {
     ) -> Result<(), SimError> {
         check_eval(self.masses.len(), x, Output::Hessian(hess.block_rows()))
     }
-    fn for_each_stencil(&self, _f: &mut dyn FnMut(&[u32])) {}
+    fn for_each_stencil(&self, _kind: HessianKind, _f: &mut dyn FnMut(&[u32])) {}
 }
 
 #[cfg(test)]

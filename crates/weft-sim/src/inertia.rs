@@ -145,7 +145,7 @@ impl Energy for Inertia {
         }
         Ok(())
     }
-    fn for_each_stencil(&self, _f: &mut dyn FnMut(&[u32])) {}
+    fn for_each_stencil(&self, _kind: HessianKind, _f: &mut dyn FnMut(&[u32])) {}
 }
 
 #[cfg(test)]

@@ -359,7 +359,11 @@ macro_rules! membrane_energy {
             ) -> Result<(), $crate::error::SimError> {
                 $crate::membrane::membrane_hessian(&self.frames, self, x, scale, kind, hess)
             }
-            fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
+            fn for_each_stencil(
+                &self,
+                _kind: $crate::energy::HessianKind,
+                f: &mut dyn FnMut(&[u32]),
+            ) {
                 $crate::membrane::face_stencils(&self.frames, f)
             }
         }

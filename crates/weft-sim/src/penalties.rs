@@ -103,7 +103,7 @@ impl Energy for LinearCollision {
         check_len("positions", self.vertex_count, x.len())?;
         check_len("hessian", self.vertex_count, hess.block_rows())
     }
-    fn for_each_stencil(&self, _f: &mut dyn FnMut(&[u32])) {}
+    fn for_each_stencil(&self, _kind: HessianKind, _f: &mut dyn FnMut(&[u32])) {}
 }
 
 /// Seed 000 eq. 6: `Σ_f a_f [(‖W^u‖ − 1)² + (‖W^v‖ − 1)²]`.

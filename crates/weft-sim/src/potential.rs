@@ -175,16 +175,16 @@ impl IncrementalPotential {
         Ok((v, g))
     }
 
-    /// The Hessian's sparsity pattern (all values zero); build it once per garment and
-    /// reuse it with [`IncrementalPotential::hessian_into`].
-    pub fn hessian_pattern(&self) -> BlockCsr {
+    /// The sparsity pattern of the Hessian of `kind` (all values zero); build it once
+    /// per garment and reuse it with [`IncrementalPotential::hessian_into`].
+    pub fn hessian_pattern(&self, kind: HessianKind) -> BlockCsr {
         let mut b = PatternBuilder::new(self.vertex_count);
-        self.for_each_stencil(&mut |s| b.add(s));
+        self.for_each_stencil(kind, &mut |s| b.add(s));
         b.build()
     }
 
-    /// Overwrites `hess` (built by [`IncrementalPotential::hessian_pattern`]) with the
-    /// Hessian at `x`.
+    /// Overwrites `hess` (built by [`IncrementalPotential::hessian_pattern`] of the
+    /// same `kind`) with the Hessian at `x`.
     pub fn hessian_into(
         &self,
         x: &[[f64; 3]],
@@ -197,7 +197,7 @@ impl IncrementalPotential {
 
     /// The Hessian at `x` in a fresh matrix.
     pub fn hessian(&self, x: &[[f64; 3]], kind: HessianKind) -> Result<BlockCsr, SimError> {
-        let mut h = self.hessian_pattern();
+        let mut h = self.hessian_pattern(kind);
         self.add_hessian(x, 1.0, kind, &mut h)?;
         Ok(h)
     }
@@ -251,9 +251,9 @@ impl Energy for IncrementalPotential {
         }
         Ok(())
     }
-    fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
+    fn for_each_stencil(&self, kind: HessianKind, f: &mut dyn FnMut(&[u32])) {
         for t in &self.terms {
-            t.term.energy().for_each_stencil(f);
+            t.term.energy().for_each_stencil(kind, f);
         }
     }
 }

@@ -398,8 +398,8 @@ impl ElasticSkin {
             ..NewtonOptions::default()
         };
         let mut pattern = PatternBuilder::new(mesh.vertex_count());
-        stretch.for_each_stencil(&mut |s| pattern.add(s));
-        bending.for_each_stencil(&mut |s| pattern.add(s));
+        stretch.for_each_stencil(newton.hessian, &mut |s| pattern.add(s));
+        bending.for_each_stencil(newton.hessian, &mut |s| pattern.add(s));
         Ok(ElasticSkin {
             rest: rest.to_vec(),
             weights: weights.clone(),

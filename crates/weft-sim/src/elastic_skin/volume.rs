@@ -187,7 +187,7 @@ impl Energy for ConeVolume {
             blocks[f].fixed_view::<3, 3>(3 * a, 3 * b).into_owned()
         })
     }
-    fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
+    fn for_each_stencil(&self, _kind: HessianKind, f: &mut dyn FnMut(&[u32])) {
         for face in &self.faces {
             f(face);
         }

@@ -120,7 +120,7 @@ impl ClothSimulator {
             body: None,
             collision_stiffness: None,
         })?;
-        let hess = potential.hessian_pattern();
+        let hess = potential.hessian_pattern(model.options().newton.hessian);
         Ok(ClothSimulator {
             model,
             potential,

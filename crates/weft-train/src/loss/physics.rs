@@ -214,8 +214,8 @@ impl Energy for PotentialTerm {
         e.add_hessian(x, scale * w, kind, hess)
     }
 
-    fn for_each_stencil(&self, f: &mut dyn FnMut(&[u32])) {
-        self.weighted().1.for_each_stencil(f)
+    fn for_each_stencil(&self, kind: HessianKind, f: &mut dyn FnMut(&[u32])) {
+        self.weighted().1.for_each_stencil(kind, f)
     }
 }
 
