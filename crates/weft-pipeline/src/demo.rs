@@ -58,7 +58,9 @@ pub struct DemoOptions {
 /// the report in about ten minutes here. Measured on tiny's test split (seed 0):
 /// 2 000 steps are 31.7 % below LBS with 0.29 % of the vertices inside the body, 3 000
 /// steps 33.4 % with 0.20 %, 1 500 steps 28.6 %, under the 30 % the demo must show
-/// (docs/benchmarks.md, "Fresh clone → demo report"). `weft train` keeps 3 000.
+/// (docs/benchmarks.md, "Fresh clone → demo report"). On the ground truth of the
+/// faster simulator of 2026-11-28 (other rounding, the split bending surrogate), 2 000
+/// steps are 30.6 % below LBS with 0.32 % inside. `weft train` keeps 3 000.
 pub const DEMO_STEPS: usize = 2000;
 
 /// Where the demo wrote what, and the headline figures.
