@@ -84,7 +84,7 @@ pub enum SimError {
     },
     /// A Hessian block was scattered outside the matrix's sparsity pattern: the matrix
     /// was built for another set of energies.
-    #[error("Hessian block ({row}, {col}) is not in the sparsity pattern; build the matrix with IncrementalPotential::hessian_pattern of the same potential")]
+    #[error("Hessian block ({row}, {col}) is not in the sparsity pattern; build the matrix with IncrementalPotential::hessian_pattern of the same potential and Hessian kind")]
     NotInPattern {
         /// Block row (vertex).
         row: usize,
