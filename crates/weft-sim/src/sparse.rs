@@ -188,24 +188,19 @@ impl BlockCsr {
         check_len("matrix-vector output", n, y.len())?;
         // Rows are independent: split them over threads in chunks big enough to pay
         // for the scheduling.
-        y.par_chunks_mut(1024)
-            .enumerate()
-            .for_each(|(c, ys)| self.mul_rows(x, ys, c * 1024));
-        Ok(())
-    }
-
-    /// Rows `first..first + y.len()` of `A x` into `y` (lengths checked by the caller).
-    fn mul_rows(&self, x: &[[f64; 3]], y: &mut [[f64; 3]], first: usize) {
         let p = &self.pattern;
-        for (o, yi) in y.iter_mut().enumerate() {
-            let i = first + o;
-            let (a, b) = (p.row_offsets[i], p.row_offsets[i + 1]);
-            let mut acc = Vector3::zeros();
-            for (m, &j) in self.values[a..b].iter().zip(&p.cols[a..b]) {
-                acc += m * Vector3::from(x[j as usize]);
+        y.par_chunks_mut(1024).enumerate().for_each(|(c, ys)| {
+            for (o, yi) in ys.iter_mut().enumerate() {
+                let i = c * 1024 + o;
+                let (a, b) = (p.row_offsets[i], p.row_offsets[i + 1]);
+                let mut acc = Vector3::zeros();
+                for (m, &j) in self.values[a..b].iter().zip(&p.cols[a..b]) {
+                    acc += m * Vector3::from(x[j as usize]);
+                }
+                *yi = [acc.x, acc.y, acc.z];
             }
-            *yi = [acc.x, acc.y, acc.z];
-        }
+        });
+        Ok(())
     }
 
     /// The diagonal blocks (zero where a row stores none, which the builder never does).
