@@ -77,6 +77,6 @@ pub use sequence::{
     simulate_sequence, FrameStats, SequenceError, SequenceOptions, SequenceProgress,
     SimulatedSequence, MAX_SUBSTEPS, MAX_WARMUP_FRAMES,
 };
-pub use solver::{ClothSimulator, NewtonOptions, SimOptions};
+pub use solver::{ClothSimulator, NewtonOptions, PreconditionerKind, SimOptions};
 pub use sparse::{BlockCsr, ElementGather, GatherCache, PatternBuilder};
 pub use stretch::{Stretch, StretchParams};

@@ -19,6 +19,7 @@ use nalgebra::{Matrix2, Matrix3x2};
 use weft_mesh::TriMesh;
 
 use crate::error::{check_count, check_nonneg, SimError};
+use crate::math::positive_part2;
 use crate::membrane::{FHessian, MembraneDensity, RestFrames};
 
 /// Lamé parameters and thickness of one face.
@@ -137,15 +138,7 @@ impl MembraneDensity for Stretch {
         let p = self.params[f];
         let e = green(fg);
         let s = e * (2.0 * p.mu) + Matrix2::identity() * (p.lambda * e.trace());
-        let eig = s.symmetric_eigen();
-        let mut plus = Matrix2::zeros();
-        for k in 0..2 {
-            let l = eig.eigenvalues[k];
-            if l > 0.0 {
-                let q = eig.eigenvectors.column(k);
-                plus += q * q.transpose() * l;
-            }
-        }
+        let plus = positive_part2(&s);
         self.stiffness_with_stress(f, fg, &plus)
     }
 }

@@ -1,7 +1,7 @@
 //! Preconditioned conjugate gradients for `H d = b` with a symmetric positive
-//! (semi-)definite block-sparse `H`, preconditioned by the inverses of its 3×3 diagonal
-//! blocks (block Jacobi: exact for the per-vertex terms — inertia, collision, friction —
-//! and cheap to apply).
+//! (semi-)definite block-sparse `H`, preconditioned by any [`Preconditioner`]; the
+//! simplest is the inverses of its 3×3 diagonal blocks (block Jacobi: exact for the
+//! per-vertex terms — inertia, collision, friction — and cheap to apply).
 
 use nalgebra::Matrix3;
 
@@ -26,47 +26,77 @@ fn dot(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
         .sum()
 }
 
-/// Inverses of the diagonal blocks; a singular block falls back to the inverse of its
-/// diagonal, then to the identity.
-pub(crate) fn block_jacobi(h: &BlockCsr) -> Vec<Matrix3<f64>> {
-    h.diagonal_blocks()
-        .into_iter()
-        .map(|b| {
-            let sym = (b + b.transpose()) * 0.5;
-            sym.try_inverse()
-                .filter(|inv| inv.iter().all(|c| c.is_finite()))
-                .unwrap_or_else(|| {
-                    Matrix3::from_diagonal(
-                        &sym.diagonal().map(|d| if d > 0.0 { 1.0 / d } else { 1.0 }),
-                    )
-                })
-        })
-        .collect()
+/// An approximation `B ≈ H⁻¹`, symmetric positive definite, applied as `z = B r`.
+pub trait Preconditioner {
+    /// `z = B r` (overwrites `z`).
+    fn apply(&self, r: &[[f64; 3]], z: &mut [[f64; 3]]);
 }
 
-fn apply(p: &[Matrix3<f64>], r: &[[f64; 3]], z: &mut [[f64; 3]]) {
-    for ((zi, ri), pi) in z.iter_mut().zip(r).zip(p) {
-        let v = pi * nalgebra::Vector3::new(ri[0], ri[1], ri[2]);
-        *zi = [v.x, v.y, v.z];
+/// Inverses of the diagonal blocks; a singular block falls back to the inverse of its
+/// diagonal, then to the identity.
+#[derive(Clone, Debug)]
+pub struct BlockJacobi(Vec<Matrix3<f64>>);
+
+impl BlockJacobi {
+    /// Block Jacobi of `h`.
+    pub fn new(h: &BlockCsr) -> Self {
+        BlockJacobi(
+            h.diagonal_blocks()
+                .into_iter()
+                .map(|b| {
+                    let sym = (b + b.transpose()) * 0.5;
+                    sym.try_inverse()
+                        .filter(|inv| inv.iter().all(|c| c.is_finite()))
+                        .unwrap_or_else(|| {
+                            Matrix3::from_diagonal(&sym.diagonal().map(|d| {
+                                if d > 0.0 {
+                                    1.0 / d
+                                } else {
+                                    1.0
+                                }
+                            }))
+                        })
+                })
+                .collect(),
+        )
     }
 }
 
-/// Solves `h x = b` from `x = 0` to relative residual `rtol` or `max_iter` iterations.
-/// Returns the last iterate (on non-positive curvature, the iterate before it, which is
-/// still a descent direction for `b = −∇E`).
+impl Preconditioner for BlockJacobi {
+    fn apply(&self, r: &[[f64; 3]], z: &mut [[f64; 3]]) {
+        for ((zi, ri), pi) in z.iter_mut().zip(r).zip(&self.0) {
+            let v = pi * nalgebra::Vector3::new(ri[0], ri[1], ri[2]);
+            *zi = [v.x, v.y, v.z];
+        }
+    }
+}
+
+/// [`pcg_with`] preconditioned by block Jacobi.
 pub fn pcg(
     h: &BlockCsr,
     b: &[[f64; 3]],
     rtol: f64,
     max_iter: usize,
 ) -> Result<(Vec<[f64; 3]>, PcgReport), SimError> {
+    pcg_with(h, b, &BlockJacobi::new(h), rtol, max_iter)
+}
+
+/// Solves `h x = b` from `x = 0` to relative residual `rtol` or `max_iter` iterations.
+/// Returns the last iterate (on non-positive curvature, the iterate before it, which is
+/// still a descent direction for `b = −∇E`).
+pub fn pcg_with(
+    h: &BlockCsr,
+    b: &[[f64; 3]],
+    pre: &dyn Preconditioner,
+    rtol: f64,
+    max_iter: usize,
+) -> Result<(Vec<[f64; 3]>, PcgReport), SimError> {
     let n = h.block_rows();
     check_len("right-hand side", n, b.len())?;
-    let pre = block_jacobi(h);
     let mut x = vec![[0.0; 3]; n];
     let mut r = b.to_vec();
     let mut z = vec![[0.0; 3]; n];
-    apply(&pre, &r, &mut z);
+    pre.apply(&r, &mut z);
     let mut p = z.clone();
     let mut hp = vec![[0.0; 3]; n];
     let bnorm = dot(b, b).sqrt();
@@ -103,7 +133,7 @@ pub fn pcg(
         if report.relative_residual <= rtol {
             break;
         }
-        apply(&pre, &r, &mut z);
+        pre.apply(&r, &mut z);
         let rz_new = dot(&r, &z);
         let beta = rz_new / rz;
         rz = rz_new;
