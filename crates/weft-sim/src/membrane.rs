@@ -209,6 +209,11 @@ impl RestFrames {
 
     /// The 9×9 vertex-space Hessian of face `f`, `A_f · Gᵀ K G`, from the F-space
     /// Hessian `K`.
+    /// Face `f`'s rest-frame shape gradients `g_a` (`F = Σ_a x_a g_aᵀ`) and its rest area.
+    pub(crate) fn shape(&self, f: usize) -> (&[[f64; 2]; 3], f64) {
+        (&self.g[f], self.area[f])
+    }
+
     pub(crate) fn element_hessian(&self, f: usize, k: &FHessian) -> SMatrix<f64, 9, 9> {
         let g = &self.g[f];
         let mut h = SMatrix::<f64, 9, 9>::zeros();
@@ -248,6 +253,17 @@ pub(crate) trait MembraneDensity {
     /// (6×6, cheaper than projecting the 9×9 vertex block: `K ⪰ 0` makes `GᵀKG ⪰ 0`).
     fn surrogate_stiffness(&self, f: usize, fgrad: &Matrix3x2<f64>) -> FHessian {
         project_psd6(&self.stiffness(f, fgrad))
+    }
+    /// Face `f`'s 9×9 block of the surrogate Newton matrix; by default `A GᵀK̃G` from
+    /// [`MembraneDensity::surrogate_stiffness`]. A density with a closed form overrides
+    /// it.
+    fn surrogate_element(
+        &self,
+        frames: &RestFrames,
+        f: usize,
+        fgrad: &Matrix3x2<f64>,
+    ) -> SMatrix<f64, 9, 9> {
+        frames.element_hessian(f, &self.surrogate_stiffness(f, fgrad))
     }
 }
 
@@ -309,7 +325,7 @@ pub(crate) fn membrane_hessian<D: MembraneDensity + Sync>(
                 HessianKind::Projected => {
                     project_psd9(&frames.element_hessian(f, &d.stiffness(f, &fg)))
                 }
-                HessianKind::Surrogate => frames.element_hessian(f, &d.surrogate_stiffness(f, &fg)),
+                HessianKind::Surrogate => d.surrogate_element(frames, f, &fg),
             }
         })
         .collect();
