@@ -18,7 +18,9 @@ use rayon::prelude::*;
 use weft_body::query::BodySurface;
 use weft_mesh::vec3::{dist, is_finite, scale, sub};
 
-use crate::contact::{BodyContact, BodyProximity};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::contact::{BodyContact, BodyProximity, Proximity};
 use crate::error::SimError;
 
 /// Default query radius (m): contacts farther than this are not reported. It matches
@@ -29,11 +31,34 @@ pub const DEFAULT_QUERY_RADIUS: f64 = 2e-2;
 const ON_SURFACE: f64 = 1e-9;
 
 /// A posed body mesh prepared for contact queries.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct PosedBody {
     surface: BodySurface,
     previous: Vec<[f64; 3]>,
     query_radius: f64,
+    /// This surface's number and the sum over its updates of the farthest any vertex
+    /// moved ([`BodyProximity::travelled`]).
+    travelled: (u64, f64),
+}
+
+/// Numbers the surfaces, so that a [`crate::Clearance`] recorded against one is never
+/// read against another.
+static SURFACES: AtomicU64 = AtomicU64::new(0);
+
+fn next_surface() -> u64 {
+    SURFACES.fetch_add(1, Ordering::Relaxed)
+}
+
+/// A clone moves on its own from here, so it is another surface.
+impl Clone for PosedBody {
+    fn clone(&self) -> Self {
+        PosedBody {
+            surface: self.surface.clone(),
+            previous: self.previous.clone(),
+            query_radius: self.query_radius,
+            travelled: (next_surface(), 0.0),
+        }
+    }
 }
 
 /// The farthest a garment may start from the body at its closest vertex (m). Garments
@@ -54,6 +79,15 @@ pub fn check_garment_gap(signed: impl IntoIterator<Item = f64>) -> Result<(), Si
         });
     }
     Ok(())
+}
+
+/// The farthest any vertex moved from `before` to `after` (m).
+fn farthest_move(before: &[[f64; 3]], after: &[[f64; 3]]) -> f64 {
+    before
+        .iter()
+        .zip(after)
+        .map(|(&a, &b)| dist(a, b))
+        .fold(0.0, f64::max)
 }
 
 /// How many garment vertices lie inside the body, and how deep the deepest is.
@@ -79,6 +113,7 @@ impl PosedBody {
             surface,
             previous: positions.to_vec(),
             query_radius: DEFAULT_QUERY_RADIUS,
+            travelled: (next_surface(), 0.0),
         })
     }
 
@@ -105,6 +140,7 @@ impl PosedBody {
             self.previous.extend_from_slice(self.surface.positions());
             return Err(e.into());
         }
+        self.travelled.1 += farthest_move(&self.previous, self.surface.positions());
         Ok(())
     }
 
@@ -113,7 +149,9 @@ impl PosedBody {
     /// edge numbering of the pseudo-normals is kept, so this costs a tree build, not the
     /// sort of every half-edge that [`PosedBody::new`] does.
     pub fn rebuild(&mut self, positions: &[[f64; 3]]) -> Result<(), SimError> {
+        let before = self.surface.positions().to_vec();
         self.surface.rebuild(positions)?;
+        self.travelled.1 += farthest_move(&before, self.surface.positions());
         self.settle();
         Ok(())
     }
@@ -160,26 +198,26 @@ impl PosedBody {
             }))
     }
 
-    fn query(&self, x: [f64; 3]) -> Option<(BodyContact, u32, [f64; 3])> {
+    /// The contact of `x` (closest point, outward normal, triangle, barycentric
+    /// coordinates), or how far outside the body it is when it has none (0 when not
+    /// known: a non-finite point).
+    fn query(&self, x: [f64; 3]) -> Result<(BodyContact, u32, [f64; 3]), f64> {
         if !is_finite(x) {
-            return None;
+            return Err(0.0);
         }
         // Within the radius, or anywhere inside: a vertex pushed deeper than the radius
         // (squeezed between an arm and the torso, say) must still be pushed back out
         // rather than left to fall through the body.
-        let c = match self
-            .surface
-            .closest_point_within(x, self.query_radius)
-            .ok()?
-        {
-            Some(c) => c,
-            None => {
-                let c = self.surface.closest_point(x).ok()?;
+        let c = match self.surface.closest_point_within(x, self.query_radius) {
+            Ok(Some(c)) => c,
+            Ok(None) => {
+                let c = self.surface.closest_point(x).map_err(|_| 0.0)?;
                 if c.signed_distance >= 0.0 {
-                    return None;
+                    return Err(c.distance);
                 }
                 c
             }
+            Err(_) => return Err(0.0),
         };
         let normal = if c.distance > ON_SURFACE {
             let s = if c.signed_distance < 0.0 { -1.0 } else { 1.0 };
@@ -187,7 +225,7 @@ impl PosedBody {
         } else {
             c.normal
         };
-        Some((
+        Ok((
             BodyContact {
                 point: c.point,
                 normal,
@@ -200,11 +238,21 @@ impl PosedBody {
 
 impl BodyProximity for PosedBody {
     fn closest(&self, x: [f64; 3]) -> Option<BodyContact> {
-        self.query(x).map(|(c, _, _)| c)
+        self.query(x).ok().map(|(c, _, _)| c)
     }
 
     fn closest_moving(&self, x: [f64; 3]) -> Option<(BodyContact, [f64; 3])> {
-        let (c, tri, bary) = self.query(x)?;
+        match self.proximity(x) {
+            Proximity::Contact(c, moved) => Some((c, moved)),
+            Proximity::Clear(_) => None,
+        }
+    }
+
+    fn proximity(&self, x: [f64; 3]) -> Proximity {
+        let (c, tri, bary) = match self.query(x) {
+            Ok(found) => found,
+            Err(clear) => return Proximity::Clear(clear),
+        };
         let face = self.surface.faces()[tri as usize];
         let mut before = [0.0; 3];
         for (&v, &b) in face.iter().zip(&bary) {
@@ -217,9 +265,13 @@ impl BodyProximity for PosedBody {
         // The closest point is on the current triangle; `before` is the same material
         // point one update earlier. A huge jump means a non-finite or teleported body.
         if !is_finite(moved) || dist(c.point, before) > 1e3 {
-            return Some((c, [0.0; 3]));
+            return Proximity::Contact(c, [0.0; 3]);
         }
-        Some((c, moved))
+        Proximity::Contact(c, moved)
+    }
+
+    fn travelled(&self) -> Option<(u64, f64)> {
+        Some(self.travelled)
     }
 }
 
@@ -326,5 +378,124 @@ mod tests {
         assert!(b.clone().with_query_radius(0.0).is_err());
         // Still usable after a failed refit.
         assert!(b.closest([0.0, 1.01, 0.0]).is_some());
+    }
+
+    /// Counts the queries a contact search makes.
+    struct Counted<'a> {
+        body: &'a PosedBody,
+        calls: std::sync::atomic::AtomicUsize,
+    }
+
+    impl BodyProximity for Counted<'_> {
+        fn closest(&self, x: [f64; 3]) -> Option<BodyContact> {
+            self.body.closest(x)
+        }
+        fn proximity(&self, x: [f64; 3]) -> Proximity {
+            self.calls.fetch_add(1, Ordering::Relaxed);
+            self.body.proximity(x)
+        }
+        fn travelled(&self) -> Option<(u64, f64)> {
+            self.body.travelled()
+        }
+    }
+
+    #[test]
+    fn far_points_report_their_clearance_and_the_body_its_travel() {
+        let s = unit_sphere();
+        let mut body = PosedBody::new(&s.positions, &s.faces).unwrap();
+        match body.proximity([0.0, 2.0, 0.0]) {
+            Proximity::Clear(d) => assert!((d - 1.0).abs() < 0.01, "{d}"),
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(
+            body.proximity([0.0, 1.01, 0.0]),
+            Proximity::Contact(..)
+        ));
+        let (id, t0) = body.travelled().unwrap();
+        assert_eq!(t0, 0.0);
+        let moved: Vec<[f64; 3]> = s
+            .positions
+            .iter()
+            .map(|p| [p[0], p[1] + 0.03, p[2]])
+            .collect();
+        body.refit(&moved).unwrap();
+        let (same, t1) = body.travelled().unwrap();
+        assert_eq!(same, id);
+        assert!((t1 - 0.03).abs() < 1e-12, "{t1}");
+        body.rebuild(&s.positions).unwrap();
+        assert!((body.travelled().unwrap().1 - 0.06).abs() < 1e-12);
+        // A clone moves on its own: another surface.
+        assert_ne!(body.clone().travelled().unwrap().0, id);
+    }
+
+    #[test]
+    fn a_clearance_skips_far_vertices_and_finds_the_same_contacts() {
+        use crate::cloth::ClothModel;
+        use crate::contact::Clearance;
+        use crate::{Material, SimOptions};
+        let s = unit_sphere();
+        let mut body = PosedBody::new(&s.positions, &s.faces).unwrap();
+        // A cloth over the top of the sphere: its middle within reach, its rim 5-9 cm off.
+        let rest = weft_mesh::primitives::grid(12, 12, 0.05);
+        let n = rest.vertex_count();
+        let model = ClothModel::uniform(&rest, &Material::hood(), SimOptions::default()).unwrap();
+        let pinned = vec![false; n];
+        let mut clearance = Clearance::default();
+        let mut calls = Vec::new();
+        for step in 0..6 {
+            // The body rises 5 mm per update; the cloth sags and ripples.
+            let lift = 0.005 * step as f64;
+            let posed: Vec<[f64; 3]> = s
+                .positions
+                .iter()
+                .map(|p| [p[0], p[1] + lift, p[2]])
+                .collect();
+            body.refit(&posed).unwrap();
+            let x: Vec<[f64; 3]> = rest
+                .positions
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let ripple = 0.002 * ((i + step) as f64).sin();
+                    [
+                        p[0] - 0.275,
+                        1.015 + ripple - 0.001 * step as f64,
+                        p[2] - 0.275,
+                    ]
+                })
+                .collect();
+            let counted = Counted {
+                body: &body,
+                calls: Default::default(),
+            };
+            let skipping = model
+                .contacts_with(&x, &pinned, Some(&counted), &mut clearance)
+                .unwrap();
+            let fresh = model.contacts(&x, &pinned, Some(&body)).unwrap();
+            assert_eq!(skipping, fresh, "step {step}");
+            assert!(!fresh.collision.is_empty());
+            calls.push(counted.calls.into_inner());
+        }
+        // The first search knows nothing; the next skip the rim (31 of 144 queried
+        // when written), less of it as the body rises towards it.
+        assert_eq!(calls[0], n);
+        assert!(calls[1] < n / 2, "{calls:?}");
+        assert!(calls.windows(2).skip(1).all(|w| w[0] <= w[1]), "{calls:?}");
+        assert!(calls[1..].iter().all(|&c| c < n), "{calls:?}");
+        // Against another surface the record is not used.
+        let other = body.clone();
+        let counted = Counted {
+            body: &other,
+            calls: Default::default(),
+        };
+        let x = rest
+            .positions
+            .iter()
+            .map(|p| [p[0] - 0.275, 1.01, p[2] - 0.275])
+            .collect::<Vec<_>>();
+        model
+            .contacts_with(&x, &pinned, Some(&counted), &mut clearance)
+            .unwrap();
+        assert_eq!(counted.calls.into_inner(), n);
     }
 }

@@ -34,7 +34,7 @@ use weft_mesh::{Hinge, Topology, TriMesh};
 use crate::bending::Bending;
 use crate::buttons::Buttons;
 use crate::collision::CubicCollision;
-use crate::contact::{BodyContact, BodyProximity, VertexContact};
+use crate::contact::{BodyProximity, Clearance, Proximity, VertexContact};
 use crate::error::{check_count, check_len, check_nonneg, check_vertex, SimError};
 use crate::friction::{Friction, FrictionContact};
 use crate::gravity::{lumped_masses, Gravity};
@@ -318,6 +318,16 @@ impl ClothModel {
     /// [`ClothModel::contacts`] finds from `step.start`.
     pub fn step_potential(&self, step: &StepInputs<'_>) -> Result<IncrementalPotential, SimError> {
         let contacts = self.contacts(step.start, step.pinned, step.body)?;
+        self.potential_with_contacts(step, contacts)
+    }
+
+    /// [`ClothModel::step_potential`] over contacts found beforehand (`step.start`,
+    /// `step.pinned` and `step.body` are not read again).
+    pub fn potential_with_contacts(
+        &self,
+        step: &StepInputs<'_>,
+        contacts: StepContacts,
+    ) -> Result<IncrementalPotential, SimError> {
         let n = self.vertex_count();
         let o = &self.options;
         let stiffness = step.collision_stiffness.unwrap_or(o.collision_stiffness);
@@ -368,6 +378,19 @@ impl ClothModel {
         pinned: &[bool],
         body: Option<&(dyn BodyProximity + Sync)>,
     ) -> Result<StepContacts, SimError> {
+        self.contacts_with(start, pinned, body, &mut Clearance::default())
+    }
+
+    /// [`ClothModel::contacts`], skipping the vertices that `clearance` (the last
+    /// search's record, which this one replaces) shows cannot be within reach of the
+    /// body: the same contacts, fewer queries.
+    pub fn contacts_with(
+        &self,
+        start: &[[f64; 3]],
+        pinned: &[bool],
+        body: Option<&(dyn BodyProximity + Sync)>,
+        clearance: &mut Clearance,
+    ) -> Result<StepContacts, SimError> {
         let n = self.vertex_count();
         check_len("start positions", n, start.len())?;
         check_len("pinned flags", n, pinned.len())?;
@@ -378,20 +401,54 @@ impl ClothModel {
             });
         }
         let Some(body) = body else {
+            clearance.record(Vec::new(), None);
             return Ok(StepContacts::default());
         };
         let o = &self.options;
         let g = v3(o.gravity).norm();
-        let found: Vec<(u32, BodyContact, [f64; 3])> = start
+        let reach = o.contact_radius.max(o.friction_radius);
+        let travelled = body.travelled();
+        // Pinned vertices, and found contacts that are not finite, count as unknown.
+        let searched: Vec<Proximity> = start
             .par_iter()
             .enumerate()
-            .filter(|(i, _)| !pinned[*i])
-            .filter_map(|(i, &p)| {
-                let (c, moved) = body.closest_moving(p)?;
-                (finite3(c.point) && finite3(c.normal) && finite3(moved))
-                    .then_some((i as u32, c, moved))
+            .map(|(i, &p)| {
+                if pinned[i] {
+                    return Proximity::Clear(0.0);
+                }
+                if let Some(bound) = clearance.bound(i, p, travelled) {
+                    if bound > reach {
+                        return Proximity::Clear(bound);
+                    }
+                }
+                match body.proximity(p) {
+                    Proximity::Contact(c, m)
+                        if !(finite3(c.point) && finite3(c.normal) && finite3(m)) =>
+                    {
+                        Proximity::Clear(0.0)
+                    }
+                    found => found,
+                }
             })
             .collect();
+        clearance.record(
+            start
+                .iter()
+                .zip(&searched)
+                .map(|(&p, s)| match s {
+                    Proximity::Clear(d) => (p, *d),
+                    Proximity::Contact(..) => (p, 0.0),
+                })
+                .collect(),
+            travelled,
+        );
+        let found = searched
+            .into_iter()
+            .enumerate()
+            .filter_map(|(i, s)| match s {
+                Proximity::Contact(c, m) => Some((i as u32, c, m)),
+                Proximity::Clear(_) => None,
+            });
         let mut out = StepContacts::default();
         for (i, c, m) in found {
             let p = start[i as usize];

@@ -79,6 +79,72 @@ pub trait BodyProximity {
     fn closest_moving(&self, x: [f64; 3]) -> Option<(BodyContact, [f64; 3])> {
         self.closest(x).map(|c| (c, [0.0; 3]))
     }
+
+    /// [`BodyProximity::closest_moving`], or where it finds no contact, how far outside
+    /// the body `x` is at least (m). The default knows no distance (`Clear(0.0)`).
+    fn proximity(&self, x: [f64; 3]) -> Proximity {
+        match self.closest_moving(x) {
+            Some((c, moved)) => Proximity::Contact(c, moved),
+            None => Proximity::Clear(0.0),
+        }
+    }
+
+    /// Which surface this is and a running total of how far it has moved over all its
+    /// updates (m): between two readings of the same surface, no surface point moved
+    /// farther than their difference. `None` (the default): not tracked, and a
+    /// [`Clearance`] then skips nothing.
+    fn travelled(&self) -> Option<(u64, f64)> {
+        None
+    }
+}
+
+/// What a body query found for one point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Proximity {
+    /// A contact and how far the touched surface point moved in the last body update.
+    Contact(BodyContact, [f64; 3]),
+    /// No contact; the point is outside the body, at least this far from it (m).
+    Clear(f64),
+}
+
+/// How far outside the body each garment vertex was at the last contact search, so
+/// that the next search skips the vertices that cannot have come within reach.
+///
+/// Exact, not a heuristic: the distance to the surface changes by at most the vertex's
+/// own motion plus the farthest any surface point moved, so a vertex that was `d`
+/// outside, moved `δx` while the surface moved at most `δb`, is still outside and at
+/// least `d − δx − δb` away (it cannot have crossed a surface it never came near). A
+/// query for a vertex beyond the body's query radius is the most expensive kind, an
+/// unbounded nearest-triangle search to tell outside from deep inside, and most of a
+/// skirt is beyond it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Clearance {
+    /// Each vertex's position and its distance bound at the last search (0: unknown).
+    at: Vec<([f64; 3], f64)>,
+    /// The body's [`BodyProximity::travelled`] then.
+    travelled: Option<(u64, f64)>,
+}
+
+impl Clearance {
+    /// The bound for vertex `i` now at `x`, with the body's `travelled` now: `None`
+    /// where nothing is known.
+    pub(crate) fn bound(
+        &self,
+        i: usize,
+        x: [f64; 3],
+        travelled: Option<(u64, f64)>,
+    ) -> Option<f64> {
+        let ((then_id, then), (now_id, now)) = (self.travelled?, travelled?);
+        let (at, d) = *self.at.get(i)?;
+        (then_id == now_id && now >= then && d > 0.0)
+            .then(|| d - (v3(x) - v3(at)).norm() - (now - then))
+    }
+
+    /// Replaces the record: one `(position, bound)` per vertex.
+    pub(crate) fn record(&mut self, at: Vec<([f64; 3], f64)>, travelled: Option<(u64, f64)>) {
+        self.at = at;
+        self.travelled = travelled;
+    }
 }
 
 /// An infinite plane (a floor), outward normal `normal`.

@@ -58,7 +58,7 @@ pub use body::{check_garment_gap, Penetration, PosedBody, MAX_GARMENT_GAP};
 pub use buttons::Buttons;
 pub use cloth::{ClothModel, StepContacts, StepInputs};
 pub use collision::CubicCollision;
-pub use contact::{BodyContact, BodyProximity, Plane, Sphere, VertexContact};
+pub use contact::{BodyContact, BodyProximity, Clearance, Plane, Proximity, Sphere, VertexContact};
 pub use elastic_skin::{ConeVolume, ElasticSkin, ElasticSkinParams, ElasticSkinReport};
 pub use energy::{gradient_of, hessian_of, hessian_pattern_of, Energy, HessianKind};
 pub use error::SimError;

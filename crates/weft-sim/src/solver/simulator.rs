@@ -16,7 +16,7 @@ use weft_mesh::TriMesh;
 use crate::bending::{BendingScale, RestAngle};
 use crate::cloth::{ClothModel, StepInputs};
 use crate::collision::{HOOD_COLLISION_EPS, HOOD_COLLISION_STIFFNESS};
-use crate::contact::BodyProximity;
+use crate::contact::{BodyProximity, Clearance};
 use crate::error::{check_len, check_nonneg, check_vertex, SimError};
 use crate::friction::{DEFAULT_FRICTION_EPS, HOOD_FRICTION_RADIUS};
 use crate::gravity::STANDARD_GRAVITY;
@@ -97,6 +97,9 @@ pub struct ClothSimulator {
     v: Vec<[f64; 3]>,
     pinned: Vec<bool>,
     pin_targets: Vec<[f64; 3]>,
+    /// What the last step's contact search learned about the vertices far from the
+    /// body, so this step's can skip them.
+    clearance: Clearance,
 }
 
 impl ClothSimulator {
@@ -129,6 +132,7 @@ impl ClothSimulator {
             x,
             v: vec![[0.0; 3]; n],
             pinned,
+            clearance: Clearance::default(),
         })
     }
 
@@ -222,14 +226,20 @@ impl ClothSimulator {
                 }
             })
             .collect();
-        self.potential = self.model.step_potential(&StepInputs {
-            start: &self.x,
-            target: &target,
-            dt,
-            pinned: &self.pinned,
-            body,
-            collision_stiffness: None,
-        })?;
+        let contacts =
+            self.model
+                .contacts_with(&self.x, &self.pinned, body, &mut self.clearance)?;
+        self.potential = self.model.potential_with_contacts(
+            &StepInputs {
+                start: &self.x,
+                target: &target,
+                dt,
+                pinned: &self.pinned,
+                body,
+                collision_stiffness: None,
+            },
+            contacts,
+        )?;
         let nc = self.potential.collision().map_or(0, |c| c.contacts().len());
         let nf = self.potential.friction().map_or(0, |f| f.contacts().len());
         // Start from the inertial target; where it lies closer to the body than ε
