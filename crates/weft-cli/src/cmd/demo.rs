@@ -23,9 +23,8 @@ pub struct DemoArgs {
     /// every stage in a minute; the figures it reports mean nothing.
     #[arg(long)]
     quick: bool,
-    /// Training steps, at least 1 (default 2 000: the cpu preset's schedule, shortened so
-    /// that a fresh clone reaches the report in about ten minutes; `weft train` runs
-    /// the preset's 3 000).
+    /// Training steps, at least 1 (default: the cpu preset's 3 000, as `weft train`; a
+    /// shorter run of the same schedule is faster and less accurate).
     #[arg(long)]
     steps: Option<std::num::NonZeroUsize>,
 }

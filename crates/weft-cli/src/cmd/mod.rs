@@ -26,7 +26,7 @@ use clap::Subcommand;
 pub enum Command {
     /// Start here: builds the tiny dataset, trains the cpu preset, evaluates it against
     /// the LBS-only baseline, animates an unseen garment and writes a report (in
-    /// ./weft-demo unless --out says otherwise; about 20 minutes).
+    /// ./weft-demo unless --out says otherwise; about 7 minutes on two cores).
     Demo(demo::DemoArgs),
     /// Inspect meshes and build their multilevel graph hierarchies.
     #[command(subcommand)]
