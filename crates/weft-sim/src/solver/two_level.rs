@@ -63,7 +63,8 @@ fn aggregate_once(adj: &[Vec<u32>], active: &[bool]) -> (Vec<u32>, usize) {
 }
 
 impl Aggregates {
-    /// Aggregates of the vertices coupled in `h`'s pattern, pinned vertices left out.
+    /// Aggregates of the vertices coupled in `h`'s pattern, pinned vertices left out,
+    /// after `rounds` rounds (at least one).
     pub fn new(h: &BlockCsr, pinned: &[bool], rounds: usize) -> Self {
         let n = h.block_rows();
         let free = |i: usize| !pinned.get(i).copied().unwrap_or(false);
@@ -83,8 +84,8 @@ impl Aggregates {
         let mut of_vertex: Vec<u32> = (0..n as u32)
             .map(|i| if free(i as usize) { i } else { NONE })
             .collect();
-        let mut count = active.iter().filter(|&&a| a).count();
-        for _ in 0..rounds {
+        let mut count = 0;
+        for _ in 0..rounds.max(1) {
             let (parent, next_count) = aggregate_once(&adj, &active);
             for a in of_vertex.iter_mut().filter(|a| **a != NONE) {
                 *a = parent[*a as usize];
