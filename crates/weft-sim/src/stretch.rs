@@ -107,6 +107,13 @@ fn green(f: &Matrix3x2<f64>) -> Matrix2<f64> {
     (f.transpose() * f - Matrix2::identity()) * 0.5
 }
 
+/// The Green strain `E` of `F` and the second Piola stress `S = 2μE + λ tr(E) I`.
+fn strain_and_stress(p: &StretchParams, f: &Matrix3x2<f64>) -> (Matrix2<f64>, Matrix2<f64>) {
+    let e = green(f);
+    let s = e * (2.0 * p.mu) + Matrix2::identity() * (p.lambda * e.trace());
+    (e, s)
+}
+
 impl MembraneDensity for Stretch {
     fn psi(&self, f: usize, fg: &Matrix3x2<f64>) -> f64 {
         let p = self.params[f];
@@ -116,17 +123,14 @@ impl MembraneDensity for Stretch {
 
     fn psi_and_stress(&self, f: usize, fg: &Matrix3x2<f64>) -> (f64, Matrix3x2<f64>) {
         let p = self.params[f];
-        let e = green(fg);
+        let (e, s) = strain_and_stress(&p, fg);
         let tr = e.trace();
-        let s = e * (2.0 * p.mu) + Matrix2::identity() * (p.lambda * tr);
         let psi = p.mu * e.norm_squared() + 0.5 * p.lambda * tr * tr;
         (p.thickness * psi, fg * s * p.thickness)
     }
 
     fn stiffness(&self, f: usize, fg: &Matrix3x2<f64>) -> FHessian {
-        let p = self.params[f];
-        let e = green(fg);
-        let s = e * (2.0 * p.mu) + Matrix2::identity() * (p.lambda * e.trace());
+        let (_, s) = strain_and_stress(&self.params[f], fg);
         self.stiffness_with_stress(f, fg, &s)
     }
 
@@ -135,11 +139,8 @@ impl MembraneDensity for Stretch {
     /// positive part `S⁺` of the stress, so no eigen-decomposition of the 6×6 is needed;
     /// under tension (`S ⪰ 0`) this is the exact `K`.
     fn surrogate_stiffness(&self, f: usize, fg: &Matrix3x2<f64>) -> FHessian {
-        let p = self.params[f];
-        let e = green(fg);
-        let s = e * (2.0 * p.mu) + Matrix2::identity() * (p.lambda * e.trace());
-        let plus = positive_part2(&s);
-        self.stiffness_with_stress(f, fg, &plus)
+        let (_, s) = strain_and_stress(&self.params[f], fg);
+        self.stiffness_with_stress(f, fg, &positive_part2(&s))
     }
 
     /// `A h [(g_aᵀS⁺g_b) I + μ (g_a·g_b) FFᵀ + μ (Fg_b)(Fg_a)ᵀ + λ (Fg_a)(Fg_b)ᵀ]` for the
@@ -154,8 +155,7 @@ impl MembraneDensity for Stretch {
         fg: &Matrix3x2<f64>,
     ) -> SMatrix<f64, 9, 9> {
         let p = self.params[f];
-        let e = green(fg);
-        let s = positive_part2(&(e * (2.0 * p.mu) + Matrix2::identity() * (p.lambda * e.trace())));
+        let s = positive_part2(&strain_and_stress(&p, fg).1);
         let (g, area) = frames.shape(f);
         let g: [Vector2<f64>; 3] = g.map(Vector2::from);
         let fg_a: [Vector3<f64>; 3] = g.map(|ga| fg * ga);
