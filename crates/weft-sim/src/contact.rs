@@ -117,6 +117,13 @@ pub enum Proximity {
 /// query for a vertex beyond the body's query radius is the most expensive kind, an
 /// unbounded nearest-triangle search to tell outside from deep inside, and most of a
 /// skirt is beyond it.
+///
+/// The argument needs a closed surface that does not pass through itself. Where a
+/// posed body does (thighs pressed together, an arm into the torso), inside and
+/// outside are not well defined away from the surface: the sign of a far point comes
+/// from whichever part is nearest, and can change without the point crossing any
+/// surface. There a skipped vertex keeps its last reading (outside) where a fresh
+/// search might have called it deep inside.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Clearance {
     /// Each vertex's position and its distance bound at the last search (0: unknown).

@@ -21,7 +21,7 @@
 
 mod gat;
 mod linear;
-mod math;
+pub(crate) mod math;
 mod multires;
 
 use std::ops::Range;

@@ -1,8 +1,12 @@
 //! Node-wise nonlinearities the papers name, as one serialisable enum so that configs
-//! (TOML) can choose them.
+//! (TOML) can choose them; [`tanh`] fused on flex.
+
+mod tanh;
 
 use burn::tensor::activation;
 use burn::tensor::Tensor;
+
+pub use tanh::tanh;
 
 /// A nonlinearity σ applied after a layer.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -32,8 +36,8 @@ impl Activation {
         match self {
             Activation::None => x,
             Activation::Relu => activation::relu(x),
-            Activation::Tanh => x.tanh(),
-            Activation::Tanhshrink => x.clone() - x.tanh(),
+            Activation::Tanh => tanh(x),
+            Activation::Tanhshrink => x.clone() - tanh(x),
             Activation::LeakyRelu(slope) => activation::leaky_relu(x, slope),
             Activation::Elu => {
                 // elu(x) = max(x, 0) + exp(min(x, 0)) − 1; the clamp before exp keeps the
