@@ -48,6 +48,16 @@ fn main() -> ExitCode {
     if std::env::var_os("WEFT_MALLOC_DEFAULTS").is_none() {
         weft_nn::backend::retain_freed_memory();
     }
+    // The main thread joins rayon's pool as its thread 0, so that a parallel operation
+    // started here runs its first half in place and the other worker steals the rest.
+    // Otherwise the main thread hands each operation to the pool and sleeps until a
+    // worker wakes it: three threads on two cores, two context switches per operation,
+    // and a training step makes thousands of small ones (docs/benchmarks.md, "The main
+    // thread in rayon's pool"). Fails only if a pool was built already, which nothing
+    // before this line does.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .use_current_thread()
+        .build_global();
     match cmd::run(cli.command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
