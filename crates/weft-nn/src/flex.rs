@@ -17,7 +17,7 @@ pub(crate) fn contiguous(t: FlexTensor) -> FlexTensor {
 /// The elements of a contiguous flex tensor of dtype `T`.
 pub(crate) fn elements<T: Real>(t: &FlexTensor) -> &[T] {
     t.as_slice::<T>()
-        .expect("fused GAT: inputs are made contiguous and of one dtype before the kernel")
+        .expect("fused kernels: inputs are made contiguous and of one dtype before the kernel")
 }
 
 /// A flex tensor from a row-major buffer.

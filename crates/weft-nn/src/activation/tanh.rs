@@ -21,7 +21,7 @@ use burn::tensor::{DType, Tensor};
 use rayon::prelude::*;
 
 use crate::backend::is_flex;
-use crate::flex::{contiguous, from_vec};
+use crate::flex::{contiguous, elements, from_vec};
 use crate::infer::math;
 use crate::real::simd;
 
@@ -84,14 +84,9 @@ fn forward(x: FlexTensor) -> FlexTensor {
         apply(&mut s[..n]);
         return x;
     }
-    let mut v = elements(&x).to_vec();
+    let mut v = elements::<f32>(&x).to_vec();
     apply(&mut v);
     from_vec(v, x.layout().shape().to_vec())
-}
-
-fn elements(x: &FlexTensor) -> &[f32] {
-    x.as_slice::<f32>()
-        .expect("fused tanh: f32 and contiguous, checked by `tanh` and `forward`")
 }
 
 /// The autodiff step of the fused operation (parent: `x`; state: `y`).
@@ -108,9 +103,9 @@ impl Backward<Flex, 1> for TanhBackward {
             return;
         };
         let y = contiguous(ops.state);
-        let mut dx = elements(&grad).to_vec();
+        let mut dx = elements::<f32>(&grad).to_vec();
         dx.par_chunks_mut(CHUNK)
-            .zip(elements(&y).par_chunks(CHUNK))
+            .zip(elements::<f32>(&y).par_chunks(CHUNK))
             .for_each(|(g, y)| {
                 simd(|| {
                     for (g, &y) in g.iter_mut().zip(y) {
