@@ -6,10 +6,19 @@
 //! The parameters and records are burn's; the forward pass is weft's ([`layer_forward`]):
 //! the same arithmetic arranged so that E^t2 at `paper` widths (132 M parameters, bound
 //! by reading its weights) reads each input weight once per window instead of once per
-//! step, and skips the hidden products of the zero initial state.
+//! step, and skips the hidden products of the zero initial state. After the gate
+//! products, each step is one fused operation with its own backward on flex ([`cell`]).
+//!
+//! ```text
+//! x ─▶ W_x (all steps at once) ─┐
+//! h₋ ─▶ W_h ────────────────────┴─▶ + ─▶ cell (σ, tanh, c = f c₋ + i g, h = o tanh c)
+//! ```
+
+mod cell;
 
 use burn::config::Config;
 use burn::module::Module;
+use burn::nn::activation::Activation;
 use burn::nn::{GateController, Lstm, LstmConfig};
 use burn::tensor::{Device, Tensor};
 
@@ -133,6 +142,7 @@ fn layer_forward(layer: &Lstm, x: Tensor<3>) -> (Tensor<3>, Tensor<2>) {
         }
     };
     let [b, t, d] = x.dims();
+    let fused = cell::fused_for(&x);
     let width = layer.d_hidden;
     let flat = x.reshape([b * t, d]);
     let gates = [
@@ -155,6 +165,11 @@ fn layer_forward(layer: &Lstm, x: Tensor<3>) -> (Tensor<3>, Tensor<2>) {
             .as_ref()
             .map(|bias| bias.val().unsqueeze_dim::<2>(0)),
     };
+    // burn's default activations (σ gates, tanh cell and hidden) take the fused step.
+    let fused = fused
+        && matches!(layer.gate_activation, Activation::Sigmoid(_))
+        && matches!(layer.cell_activation, Activation::Tanh(_))
+        && matches!(layer.hidden_activation, Activation::Tanh(_));
     let mut cell: Option<Tensor<2>> = None;
     let mut hidden: Option<Tensor<2>> = None;
     let mut sequence = Vec::with_capacity(t);
@@ -169,15 +184,19 @@ fn layer_forward(layer: &Lstm, x: Tensor<3>) -> (Tensor<3>, Tensor<2>) {
                 None => x_term,
             }
         });
-        let i = layer.gate_activation.forward(i);
-        let f = layer.gate_activation.forward(f);
-        let o = layer.gate_activation.forward(o);
-        let candidate = layer.cell_activation.forward(c);
-        let c = match cell {
-            Some(previous) => f * previous + i * candidate,
-            None => i * candidate,
+        let (h, c) = if fused {
+            cell::lstm_cell([i, f, o, c], cell)
+        } else {
+            let i = layer.gate_activation.forward(i);
+            let f = layer.gate_activation.forward(f);
+            let o = layer.gate_activation.forward(o);
+            let candidate = layer.cell_activation.forward(c);
+            let c = match cell {
+                Some(previous) => f * previous + i * candidate,
+                None => i * candidate,
+            };
+            (o * layer.hidden_activation.forward(c.clone()), c)
         };
-        let h = o * layer.hidden_activation.forward(c.clone());
         sequence.push(h.clone());
         cell = Some(c);
         hidden = Some(h);
