@@ -114,7 +114,7 @@ impl BodySurface {
         let (feature, normal) = match tp.feature {
             LocalFeature::Vertex(k) => {
                 let v = face[k as usize];
-                (SurfaceFeature::Vertex(v), self.normals.vertex[v as usize])
+                (SurfaceFeature::Vertex(v), self.vertex_normal(v))
             }
             LocalFeature::Edge(k) => {
                 let e = self.normals.face_edges[triangle as usize][k as usize] as usize;
@@ -130,7 +130,7 @@ impl BodySurface {
         };
         let mut smooth = [0.0; 3];
         for (&v, &b) in face.iter().zip(&tp.barycentric) {
-            smooth = add_scaled(smooth, self.normals.vertex[v as usize], b);
+            smooth = add_scaled(smooth, self.vertex_normal(v), b);
         }
         let smooth = normalize_or_zero(smooth);
         let distance = distance_sq.sqrt();

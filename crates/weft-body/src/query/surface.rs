@@ -2,6 +2,7 @@
 //! pseudo-normals, ready for closest-point and signed-distance queries, updated per
 //! frame by a refit or a rebuild.
 
+use rayon::prelude::*;
 use weft_mesh::{Aabb, TriMesh};
 
 use super::aabb_tree::AabbTree;
@@ -138,8 +139,18 @@ impl BodySurface {
 
     /// Unit angle-weighted pseudo-normal of each vertex (zero for an unused vertex):
     /// the vertex normal to use for signs and for interpolated shading normals.
-    pub fn vertex_normals(&self) -> &[[f64; 3]] {
-        &self.normals.vertex
+    pub fn vertex_normals(&self) -> Vec<[f64; 3]> {
+        (0..self.positions.len() as u32)
+            .into_par_iter()
+            .map(|v| self.vertex_normal(v))
+            .collect()
+    }
+
+    /// [`BodySurface::vertex_normals`] of one vertex (computed on first use after each
+    /// update, [`PseudoNormals`]).
+    pub fn vertex_normal(&self, v: u32) -> [f64; 3] {
+        self.normals
+            .vertex(v as usize, &self.positions, &self.faces)
     }
 
     /// Whether every edge has exactly two faces (a closed 2-manifold edge graph), the
