@@ -23,8 +23,9 @@ pub struct DemoArgs {
     /// every stage in a minute; the figures it reports mean nothing.
     #[arg(long)]
     quick: bool,
-    /// Training steps, at least 1 (default: the cpu preset's 3 000, as `weft train`; a
-    /// shorter run of the same schedule is faster and less accurate).
+    /// Training steps, at least 1 (default: 2 500, the cpu preset's schedule compressed;
+    /// 3 000 is the preset's own budget, as `weft train`: slower and a little more
+    /// accurate).
     #[arg(long)]
     steps: Option<std::num::NonZeroUsize>,
 }
