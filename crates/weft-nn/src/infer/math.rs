@@ -51,6 +51,12 @@ pub(crate) fn tanh(x: f32) -> f32 {
     }
 }
 
+/// `σ(x) = 1 / (1 + e⁻ˣ)`, with [`exp`].
+#[inline(always)]
+pub(crate) fn sigmoid(x: f32) -> f32 {
+    1.0 / (1.0 + exp(-x))
+}
+
 /// `x ← eˣ` element-wise.
 #[inline(always)]
 pub(crate) fn exp_in_place(x: &mut [f32]) {
@@ -75,7 +81,7 @@ pub(crate) fn activate(activation: Activation, x: &mut [f32]) {
         Activation::Elu => x
             .iter_mut()
             .for_each(|v| *v = v.max(0.0) + exp(v.min(0.0)) - 1.0),
-        Activation::Sigmoid => x.iter_mut().for_each(|v| *v = 1.0 / (1.0 + exp(-*v))),
+        Activation::Sigmoid => x.iter_mut().for_each(|v| *v = sigmoid(*v)),
     }
 }
 

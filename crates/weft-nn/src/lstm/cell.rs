@@ -21,6 +21,8 @@ use burn::backend::autodiff::Autodiff;
 use burn::backend::flex::FlexTensor;
 use burn::backend::tensor::FloatTensor;
 use burn::backend::{backend_extension, Backend, Dispatch, Flex};
+use burn::nn::activation::Activation;
+use burn::nn::Lstm;
 use burn::tensor::{DType, Tensor};
 
 use crate::backend::is_flex;
@@ -28,9 +30,14 @@ use crate::flex::{contiguous, elements, from_vec};
 use crate::infer::math;
 use crate::real::simd;
 
-/// Whether [`lstm_cell`] takes tensors like `x`: f32 on flex.
-pub(crate) fn fused_for(x: &Tensor<3>) -> bool {
-    x.dtype() == DType::F32 && is_flex(&x.device())
+/// Whether [`lstm_cell`] computes `layer`'s steps on inputs like `x`: burn's default
+/// activations (σ gates, tanh cell and hidden) on f32 tensors on flex.
+pub(crate) fn fused_for(layer: &Lstm, x: &Tensor<3>) -> bool {
+    x.dtype() == DType::F32
+        && is_flex(&x.device())
+        && matches!(layer.gate_activation, Activation::Sigmoid(_))
+        && matches!(layer.cell_activation, Activation::Tanh(_))
+        && matches!(layer.hidden_activation, Activation::Tanh(_))
 }
 
 /// `(h, c)` of one step from the gate pre-activations `[aᵢ, a_f, a_o, a_c]` (each
@@ -120,7 +127,6 @@ fn forward(inputs: [FlexTensor; 5]) -> (FlexTensor, CellState) {
     let [ai, af, ao, ac, prev] = inputs.each_ref().map(|t| &elements::<f32>(t)[..n]);
     let mut out = vec![0.0f32; 2 * n];
     let mut act = vec![0.0f32; 5 * n];
-    let sigmoid = |x: f32| 1.0 / (1.0 + math::exp(-x));
     simd(|| {
         let (acts, rest) = act.split_at_mut(n);
         let (actf, rest) = rest.split_at_mut(n);
@@ -131,9 +137,9 @@ fn forward(inputs: [FlexTensor; 5]) -> (FlexTensor, CellState) {
             for k in 0..w {
                 let j = r * w + k;
                 let (i, f, o, g) = (
-                    sigmoid(ai[j]),
-                    sigmoid(af[j]),
-                    sigmoid(ao[j]),
+                    math::sigmoid(ai[j]),
+                    math::sigmoid(af[j]),
+                    math::sigmoid(ao[j]),
                     math::tanh(ac[j]),
                 );
                 let c = f * prev[j] + i * g;

@@ -18,7 +18,6 @@ mod cell;
 
 use burn::config::Config;
 use burn::module::Module;
-use burn::nn::activation::Activation;
 use burn::nn::{GateController, Lstm, LstmConfig};
 use burn::tensor::{Device, Tensor};
 
@@ -142,7 +141,7 @@ fn layer_forward(layer: &Lstm, x: Tensor<3>) -> (Tensor<3>, Tensor<2>) {
         }
     };
     let [b, t, d] = x.dims();
-    let fused = cell::fused_for(&x);
+    let fused = cell::fused_for(layer, &x);
     let width = layer.d_hidden;
     let flat = x.reshape([b * t, d]);
     let gates = [
@@ -165,11 +164,6 @@ fn layer_forward(layer: &Lstm, x: Tensor<3>) -> (Tensor<3>, Tensor<2>) {
             .as_ref()
             .map(|bias| bias.val().unsqueeze_dim::<2>(0)),
     };
-    // burn's default activations (σ gates, tanh cell and hidden) take the fused step.
-    let fused = fused
-        && matches!(layer.gate_activation, Activation::Sigmoid(_))
-        && matches!(layer.cell_activation, Activation::Tanh(_))
-        && matches!(layer.hidden_activation, Activation::Tanh(_));
     let mut cell: Option<Tensor<2>> = None;
     let mut hidden: Option<Tensor<2>> = None;
     let mut sequence = Vec::with_capacity(t);
