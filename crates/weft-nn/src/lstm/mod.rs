@@ -6,15 +6,16 @@
 //! The parameters and records are burn's; the forward pass is weft's ([`layer_forward`]):
 //! the same arithmetic arranged so that E^t2 at `paper` widths (132 M parameters, bound
 //! by reading its weights) reads each input weight once per window instead of once per
-//! step, and skips the hidden products of the zero initial state. After the gate
-//! products, each step is one fused operation with its own backward on flex ([`cell`]).
+//! step, and skips the hidden products of the zero initial state. After the input
+//! projections, the recurrence of a layer is one fused operation with its own backward
+//! on flex ([`recurrence`]).
 //!
 //! ```text
 //! x ─▶ W_x (all steps at once) ─┐
 //! h₋ ─▶ W_h ────────────────────┴─▶ + ─▶ cell (σ, tanh, c = f c₋ + i g, h = o tanh c)
 //! ```
 
-mod cell;
+mod recurrence;
 
 use burn::config::Config;
 use burn::module::Module;
@@ -123,12 +124,14 @@ impl LstmEncoder {
 }
 
 /// One layer over `x` `[B, T, D]` from the zero state: `(hidden sequence [B, T, H], last
-/// hidden state [B, H])`, as [`Lstm::forward`] computes them, with two changes of
+/// hidden state [B, H])`, as [`Lstm::forward`] computes them, with changes of
 /// arrangement only:
 /// - each gate's input projection `W_x x + b_x` is one GEMM over all `T` steps (burn
 ///   multiplies step by step, reading the input weights `T` times);
 /// - at step 0 the hidden state is zero, so `W_h h + b_h` is just `b_h` (burn multiplies
-///   the zeros).
+///   the zeros);
+/// - on flex, the steps after the projections are one operation
+///   ([`recurrence::hidden_sequence`]); elsewhere they are tensor operations.
 ///
 /// A layer configured otherwise than [`LstmEncoderConfig`] makes them (reversed, time
 /// first, clipped, coupled gates) goes through burn's own forward.
@@ -141,7 +144,7 @@ fn layer_forward(layer: &Lstm, x: Tensor<3>) -> (Tensor<3>, Tensor<2>) {
         }
     };
     let [b, t, d] = x.dims();
-    let fused = cell::fused_for(layer, &x);
+    let fused = recurrence::fused_for(layer, &x);
     let width = layer.d_hidden;
     let flat = x.reshape([b * t, d]);
     let gates = [
@@ -155,6 +158,22 @@ fn layer_forward(layer: &Lstm, x: Tensor<3>) -> (Tensor<3>, Tensor<2>) {
             .forward(flat.clone())
             .reshape([b, t, width])
     });
+    if fused {
+        let weights = gates.map(|g| g.hidden_transform.weight.val());
+        let biases = gates.map(|g| {
+            g.hidden_transform
+                .bias
+                .as_ref()
+                .expect("fused_for checks the hidden biases")
+                .val()
+        });
+        let sequence = recurrence::hidden_sequence(projected, weights, biases);
+        let last = sequence
+            .clone()
+            .slice([0..b, t - 1..t, 0..width])
+            .reshape([b, width]);
+        return (sequence, last);
+    }
     // `W_h h + b_h` of gate `g`; `None` for the zero state.
     let hidden_term = |g: &GateController, h: Option<&Tensor<2>>| match h {
         Some(h) => Some(g.hidden_transform.forward(h.clone())),
@@ -178,19 +197,15 @@ fn layer_forward(layer: &Lstm, x: Tensor<3>) -> (Tensor<3>, Tensor<2>) {
                 None => x_term,
             }
         });
-        let (h, c) = if fused {
-            cell::lstm_cell([i, f, o, c], cell)
-        } else {
-            let i = layer.gate_activation.forward(i);
-            let f = layer.gate_activation.forward(f);
-            let o = layer.gate_activation.forward(o);
-            let candidate = layer.cell_activation.forward(c);
-            let c = match cell {
-                Some(previous) => f * previous + i * candidate,
-                None => i * candidate,
-            };
-            (o * layer.hidden_activation.forward(c.clone()), c)
+        let i = layer.gate_activation.forward(i);
+        let f = layer.gate_activation.forward(f);
+        let o = layer.gate_activation.forward(o);
+        let candidate = layer.cell_activation.forward(c);
+        let c = match cell {
+            Some(previous) => f * previous + i * candidate,
+            None => i * candidate,
         };
+        let h = o * layer.hidden_activation.forward(c.clone());
         sequence.push(h.clone());
         cell = Some(c);
         hidden = Some(h);
