@@ -5,11 +5,12 @@
 //! the cell, and burn's autodiff differentiates each product alone. Each gate and step
 //! then gets its own `H × H` weight gradient — of rank `B`, 8 rows in a `cpu` training
 //! window of E^t2 — which is allocated, written and added to the others: E^t2's forward
-//! and backward in a training window took 88 ms, for 2 GFLOP. Here the forward runs the
-//! steps (per step and gate one product `h₋ W_h` into the gate's pre-activation, then σ,
-//! tanh and the cell in one pass), the backward runs them back (per step the cell's
-//! derivative, then `∂h₋ = Σ_g ∂a_g W_gᵀ`), and each weight gradient is formed once,
-//! `∂W_g = Σ_t h_{t−1}ᵀ ∂a_{g,t}`, as one product over all steps.
+//! and backward in a training window took 88 ms, for 2 GFLOP (43 ms now;
+//! docs/benchmarks.md). Here the forward runs the steps (per step and gate one product
+//! `h₋ W_h` into the gate's pre-activation, then σ, tanh and the cell in one pass), the
+//! backward runs them back (per step the cell's derivative, then `∂h₋ = Σ_g ∂a_g W_gᵀ`),
+//! and each weight gradient is formed once, `∂W_g = Σ_t h_{t−1}ᵀ ∂a_{g,t}`, as one
+//! product over all steps.
 //!
 //! Gates in burn's order `i, f, o, c` (input, forget, output, candidate): `i = σ(aᵢ)`,
 //! `f = σ(a_f)`, `o = σ(a_o)`, `g = tanh a_c`, `c = f c₋ + i g`, `h = o tanh c`, with
@@ -191,7 +192,8 @@ fn forward(inputs: [FlexTensor; 12]) -> (FlexTensor, RecurrenceState) {
     let mut cells = vec![0.0f32; t * n];
     let mut pre = [(); 4].map(|_| vec![0.0f32; n]);
     for step in 0..t {
-        // The gates in parallel: a step's products are too small for `gemm` to split.
+        // The gates in parallel (at `cpu` widths a step's products are too small for
+        // `gemm` to split them over threads).
         let previous_hidden = &hidden;
         pre.par_iter_mut().enumerate().for_each(|(g, a)| {
             for r in 0..b {
