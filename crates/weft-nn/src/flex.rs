@@ -24,3 +24,13 @@ pub(crate) fn elements<T: Real>(t: &FlexTensor) -> &[T] {
 pub(crate) fn from_vec<T: Real>(values: Vec<T>, shape: Vec<usize>) -> FlexTensor {
     FlexTensor::from_data(TensorData::new(values, shape))
 }
+
+/// Threads for a `gemm` product of `m × k` by `k × n`, as burn flex decides them: only
+/// where the product is big enough to pay for them.
+pub(crate) fn gemm_parallelism(m: usize, n: usize, k: usize) -> gemm::Parallelism {
+    if m * n * k >= 192 * 192 * 192 {
+        gemm::Parallelism::Rayon(0)
+    } else {
+        gemm::Parallelism::None
+    }
+}

@@ -158,12 +158,7 @@ fn matmul(x: Columns<'_>, w: &[f32], n: usize) -> Features {
     if m == 0 || n == 0 || k == 0 {
         return out;
     }
-    // As burn flex: threads only where the product is big enough to pay for them.
-    let parallelism = if m * n * k >= 192 * 192 * 192 {
-        gemm::Parallelism::Rayon(0)
-    } else {
-        gemm::Parallelism::None
-    };
+    let parallelism = crate::flex::gemm_parallelism(m, n, k);
     // SAFETY: `out` holds `m × n` values at row stride `n`; `w` holds `k × n` at row
     // stride `n` (asserted); `x` reads rows `r < m` at `start + r·stride + c` with
     // `c < k` and `start + k ≤ stride`, inside `x.data` (`m·stride` values). `gemm`

@@ -32,7 +32,7 @@ use burn::tensor::{DType, Tensor};
 use rayon::prelude::*;
 
 use crate::backend::is_flex;
-use crate::flex::{contiguous, elements, from_vec};
+use crate::flex::{contiguous, elements, from_vec, gemm_parallelism};
 use crate::infer::math;
 use crate::real::simd;
 
@@ -164,12 +164,13 @@ impl Dims {
     }
 }
 
-/// What the backward needs: the hidden sequence (`[B, T, H]`), every step's `i, f, o,
-/// g, tanh c` (`[T, 5, B·H]`) and cell (`[T, B·H]`), and the hidden weights.
+/// What the backward needs: the hidden sequence (the operation's output, `[B, T, H]`),
+/// every step's `i, f, o, g, tanh c` (`[T, 5, B·H]`) and cell (`[T, B·H]`), and the
+/// hidden weights.
 #[derive(Clone, Debug)]
 struct RecurrenceState {
     dims: Dims,
-    hidden: Vec<f32>,
+    hidden: FlexTensor,
     activations: Vec<f32>,
     cells: Vec<f32>,
     weights: [FlexTensor; 4],
@@ -240,14 +241,15 @@ fn forward(inputs: [FlexTensor; 12]) -> (FlexTensor, RecurrenceState) {
             }
         });
     }
+    let sequence = from_vec(hidden, vec![b, t, h]);
     let state = RecurrenceState {
         dims,
-        hidden: hidden.clone(),
+        hidden: sequence.clone(),
         activations,
         cells,
         weights: [4, 5, 6, 7].map(|k| inputs[k].clone()),
     };
-    (from_vec(hidden, vec![b, t, h]), state)
+    (sequence, state)
 }
 
 /// The autodiff step (parents: the four projections, weights and biases). Backwards over
@@ -328,7 +330,7 @@ impl Backward<Flex, 12> for RecurrenceBackward {
             }
             out
         };
-        let h_previous = (pairs > 0).then(|| pack(&st.hidden, 0..t - 1));
+        let h_previous = (pairs > 0).then(|| pack(elements::<f32>(&st.hidden), 0..t - 1));
         let [p_i, p_f, p_o, p_c, w_i, w_f, w_o, w_c, b_i, b_f, b_o, b_c] = ops.parents;
         let weight_nodes = [w_i, w_f, w_o, w_c];
         let weight_grads: Vec<Option<Vec<f32>>> = (0..4)
@@ -446,12 +448,7 @@ fn product(out: &mut [f32], stride: usize, lhs: Operand<'_>, rhs: Operand<'_>, a
     if m == 0 || n == 0 || k == 0 {
         return;
     }
-    // As burn flex: threads only where the product is big enough to pay for them.
-    let parallelism = if m * n * k >= 192 * 192 * 192 {
-        gemm::Parallelism::Rayon(0)
-    } else {
-        gemm::Parallelism::None
-    };
+    let parallelism = gemm_parallelism(m, n, k);
     // `gemm`'s kernels are tall (many rows of the output per register block): with the
     // few rows of a step (`B`), multiply `outᵀ = rhsᵀ lhsᵀ` instead, the same products
     // read through swapped strides.
