@@ -34,3 +34,7 @@ pub(crate) fn gemm_parallelism(m: usize, n: usize, k: usize) -> gemm::Parallelis
         gemm::Parallelism::None
     }
 }
+
+/// Elements per parallel chunk of an element-wise pass on flex: smaller tensors stay on
+/// one thread (waking the other costs more than it saves).
+pub(crate) const PARALLEL_CHUNK: usize = 1 << 14;

@@ -21,13 +21,9 @@ use burn::tensor::{DType, Tensor};
 use rayon::prelude::*;
 
 use crate::backend::is_flex;
-use crate::flex::{contiguous, elements, from_vec};
+use crate::flex::{contiguous, elements, from_vec, PARALLEL_CHUNK as CHUNK};
 use crate::infer::math;
 use crate::real::simd;
-
-/// Elements per parallel chunk: smaller tensors stay on one thread (waking the other
-/// costs more than it saves).
-const CHUNK: usize = 1 << 14;
 
 /// `tanh x` element-wise; see the module documentation.
 pub fn tanh<const D: usize>(x: Tensor<D>) -> Tensor<D> {

@@ -20,7 +20,7 @@ use burn::tensor::{DType, Device, Tensor};
 use rayon::prelude::*;
 
 use crate::backend::is_flex;
-use crate::flex::{contiguous, elements, from_vec};
+use crate::flex::{contiguous, elements, from_vec, PARALLEL_CHUNK as CHUNK};
 use crate::real::{simd, Real};
 
 /// Configuration of [`Adamax`]; defaults are PyTorch's.
@@ -366,12 +366,11 @@ fn update<T: Real>(
     (t, m, u)
 }
 
-/// Elements per parallel chunk of the update. The pass is memory-bound, and one core
-/// does not reach the memory bandwidth of two: on one thread the update of the `cpu`
-/// preset's 8.5 M parameters was 4.6 % of a training step's samples, with the other
-/// core idle (docs/benchmarks.md). Smaller parameters stay on one thread. Each element
-/// is updated alone, so the result does not depend on the split.
-const CHUNK: usize = 1 << 14;
+// The pass is split into chunks of `CHUNK` over rayon's threads: it is memory-bound,
+// and one core does not reach the memory bandwidth of two (on one thread the update of
+// the `cpu` preset's 8.5 M parameters was 4.6 % of a training step's samples, with the
+// other core idle; docs/benchmarks.md). Each element is updated alone, so the result
+// does not depend on the split.
 
 fn in_place<T: Real, const DECAY: bool>(c: &Constants<T>, grad: &[T], [t, m, u]: [&mut [T]; 3]) {
     let run = |grad: &[T], t: &mut [T], m: &mut [T], u: &mut [T]| {
