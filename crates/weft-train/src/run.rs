@@ -65,6 +65,9 @@ pub struct TrainerState<S> {
     /// before metrics were named).
     #[serde(default)]
     pub validation: Metrics,
+    /// The task's memory ([`crate::task::TrainTask::memory`]; absent when it keeps none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub memory: Option<serde_json::Value>,
 }
 
 /// A run directory; see the module documentation.

@@ -93,4 +93,17 @@ pub trait TrainTask {
     /// Prepares `model` and the task for `stage`: called when a run starts or resumes
     /// and after every change.
     fn enter_stage(&mut self, model: Self::Model, stage: &Self::Stage) -> Self::Model;
+
+    /// What the task carries from item to item besides the model and the stage (HOOD's
+    /// kept rollouts), saved in every checkpoint so that a resumed run repeats the
+    /// uninterrupted one; `None`: nothing.
+    fn memory(&self) -> Option<serde_json::Value> {
+        None
+    }
+
+    /// Takes back what [`TrainTask::memory`] saved; the error says what does not fit.
+    fn restore_memory(&mut self, memory: serde_json::Value) -> std::result::Result<(), String> {
+        let _ = memory;
+        Ok(())
+    }
 }

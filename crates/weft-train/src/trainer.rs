@@ -100,7 +100,16 @@ pub fn train<T: TrainTask>(
                 );
             }
         }
-        let (model, optim, state) = run.load(model, optimizer(&cfg))?;
+        let (model, optim, mut state) = run.load(model, optimizer(&cfg))?;
+        if let Some(memory) = state.memory.take() {
+            task.restore_memory(memory)
+                .map_err(|found| TrainError::Mismatch {
+                    path: run.checkpoints(),
+                    field: "memory".into(),
+                    found,
+                    expected: "the task's kept state for this run".into(),
+                })?;
+        }
         let log = MetricsLog::resume(&metrics_path, state.step)?;
         (model, optim, state, log)
     } else {
@@ -115,6 +124,7 @@ pub fn train<T: TrainTask>(
             lr: LrState::default(),
             non_finite_in_a_row: 0,
             validation: Metrics::new(),
+            memory: None,
         };
         (
             model,
@@ -291,6 +301,7 @@ pub fn train<T: TrainTask>(
                 .map_or(String::new(), |v| format!(" {primary} {v:.4}"))
         ));
         if state.step % cfg.checkpoint_every == 0 || final_step {
+            state.memory = task.memory();
             last_checkpoint = Some(run.save(&model, &optim, &state)?);
             log.write_curves(
                 &run.root().join("curves.png"),

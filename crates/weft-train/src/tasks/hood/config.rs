@@ -74,6 +74,14 @@ pub struct HoodTraining {
     /// implicit step slowly; the step itself, solved by Newton on the same potential, is
     /// a well-conditioned target (docs/hood.md).
     pub solver_weight: f64,
+    /// Probability that an item goes on with a rollout an earlier item left (the
+    /// model's own predicted state, its garment, motion and material, from the frame it
+    /// reached) instead of starting from the skinned garment. 0 is HOOD: every item
+    /// starts skinned, so the network never trains on the states its own errors lead to
+    /// in a long rollout, and a rollout that drifts keeps drifting (docs/hood.md).
+    pub replay: f64,
+    /// The most frames a kept rollout runs before its slot starts afresh.
+    pub replay_frames: usize,
     /// Validation scenes (held-out shapes, motions and materials) and their frames.
     pub validation_scenes: usize,
     /// Frames of each validation rollout.
@@ -127,6 +135,8 @@ impl HoodTraining {
             open_front: 0.0,
             random_centres: true,
             solver_weight: 0.0,
+            replay: 0.0,
+            replay_frames: 60,
             validation_scenes: 4,
             validation_frames: 60,
         }
@@ -184,6 +194,7 @@ impl HoodTraining {
             ("train.max_rollout", self.max_rollout),
             ("train.rollout_every", self.rollout_every),
             ("train.validation_frames", self.validation_frames),
+            ("train.replay_frames", self.replay_frames),
         ] {
             if v == 0 {
                 return Err(TrainError::config(field, v, "at least 1"));
@@ -214,6 +225,7 @@ impl HoodTraining {
             ("train.settle_probability", self.settle_probability),
             ("train.two_materials", self.two_materials),
             ("train.open_front", self.open_front),
+            ("train.replay", self.replay),
         ] {
             if !(0.0..=1.0).contains(&v) {
                 return Err(TrainError::config(field, v, "between 0 and 1"));

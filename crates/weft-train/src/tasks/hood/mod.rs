@@ -18,6 +18,11 @@
 //!   `solver_weight` > 0. HOOD steps the optimiser after every
 //!   rollout step; here the steps of one item share one optimiser step, so an item is a
 //!   pure function of its index and the model, and a resumed run repeats it exactly.
+//! - Replay (`[train] replay`, not in HOOD): an item may instead go on with the rollout
+//!   an earlier item left in its slot, from the model's own state at the frame it
+//!   reached, so the network learns to correct the states its errors lead to. The kept
+//!   rollouts are saved in every checkpoint ([`TrainTask::memory`]), and a resumed run
+//!   still repeats the uninterrupted one.
 //! - Stages: the rollout length (1 → `max_rollout`, one more every `rollout_every`
 //!   steps) and the collision weight's level (HOOD's ramp of the collision stiffness,
 //!   taken in [`COLLISION_LEVELS`] geometric steps).
@@ -42,7 +47,7 @@ use weft_mesh::TriMesh;
 use weft_models::hood::rollout::{host_positions, next_positions};
 use weft_models::hood::{
     roll_out, Advance, Hood, HoodConfig, HoodInput, HoodStats, HoodStatsFit, Materials,
-    RolloutOptions, Scene, StateRef, StepAt, STATS_FILE,
+    RolloutOptions, Scene, State, StateRef, StepAt, STATS_FILE,
 };
 use weft_models::Clip;
 use weft_motion::{MotionKind, ProceduralParams};
@@ -70,6 +75,13 @@ pub const GRADIENT_NORM: &str = "gradient_norm";
 
 /// Samples the normalisers are fitted on (HOOD's warm-up: 100 iterations).
 const STATS_SAMPLES: usize = 64;
+
+/// Rollouts kept going across items (`[train] replay`): items take the slots in turn.
+const REPLAY_SLOTS: usize = 8;
+
+/// A kept rollout further from its skinned garment than this (m) has diverged; its slot
+/// starts afresh rather than teach from an exploded state.
+const REPLAY_DRIFT: f64 = 0.5;
 
 /// Training items per epoch: samples are drawn from their index, so this only sets how
 /// often the order is reshuffled.
@@ -202,6 +214,21 @@ struct Sample {
     open: Option<bool>,
 }
 
+/// A rollout kept for a later item (`[train] replay`): the sample it belongs to, the
+/// motion frame its state has reached, and that state (the model's own predictions).
+#[derive(Clone, Debug)]
+struct Live {
+    /// The item and rollout length whose fresh sample started it (what a checkpoint
+    /// saves of `sample`).
+    origin: (usize, usize),
+    sample: Sample,
+    /// The motion frame of `state.cur`.
+    frame: usize,
+    /// Frames run since its skinned start.
+    age: usize,
+    state: State,
+}
+
 impl Sample {
     /// Whether the rollout's step `k` is the settling step.
     fn settles(&self, k: usize, config: &HoodConfig) -> bool {
@@ -221,6 +248,10 @@ pub struct HoodTask {
     seed: u64,
     stage: Stage,
     device: Device,
+    /// Kept rollouts, [`REPLAY_SLOTS`] of them once `[train] replay` > 0.
+    live: Vec<Option<Live>>,
+    /// Items evaluated so far: the next one's replay slot.
+    evaluated: usize,
 }
 
 /// The two-material split of a garment: vertices on the positive side of a random plane
@@ -434,6 +465,8 @@ impl HoodTask {
             seed,
             stage: Stage::default(),
             device: device.clone(),
+            live: vec![None; REPLAY_SLOTS],
+            evaluated: 0,
         };
         task.validation = task.validation_scenes(&mut rng)?;
         task.stats = match stats {
@@ -630,6 +663,125 @@ impl HoodTask {
     }
 }
 
+impl HoodTask {
+    /// The rollout in `slot` for item `item`, moved on so that its window of `rollout`
+    /// steps starts at the frame it reached, when the item draws a replay
+    /// (`[train] replay`) and the rollout has frames and age left.
+    fn replayed(&mut self, item: usize, slot: usize, rollout: usize) -> Option<Live> {
+        if self.training.replay <= 0.0 {
+            return None;
+        }
+        let mut rng = SplitMix64::new(
+            (self.seed ^ 0x5EED_4E91_A7ED_0000)
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                .wrapping_add(item as u64),
+        );
+        if rng.unit() >= self.training.replay {
+            return None;
+        }
+        let live = self.live[slot].take()?;
+        let frames = self.motions[live.sample.motion].poses.len();
+        let fits = live.frame + rollout < frames;
+        let young = live.age + rollout <= self.training.replay_frames;
+        (fits && young).then(|| {
+            let mut live = live;
+            // The window's frame before the start is `first`, its start `first + 1`.
+            live.sample.first = live.frame - 1;
+            live.sample.at_rest = false;
+            live.sample.noise_seed = rng.next_u64();
+            live
+        })
+    }
+
+    /// What an item's rollout leaves for a later one: its state at window frame `t`,
+    /// unless it has drifted [`REPLAY_DRIFT`] from the skinned garment (diverged).
+    fn kept(
+        &self,
+        scene: &Scene,
+        origin: (usize, usize),
+        sample: Sample,
+        t: usize,
+        age: usize,
+        state: State,
+    ) -> Option<Live> {
+        let skinned = scene.pin_targets(t);
+        let drift = state
+            .cur
+            .iter()
+            .zip(&skinned)
+            .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>())
+            .fold(
+                0.0,
+                |m: f64, d| if d.is_nan() { f64::INFINITY } else { m.max(d) },
+            )
+            .sqrt();
+        (drift < REPLAY_DRIFT).then(|| Live {
+            origin,
+            frame: sample.first + t,
+            sample,
+            age,
+            state,
+        })
+    }
+}
+
+/// [`HoodTask`]'s memory in a checkpoint: its kept rollouts, positions as their `f64`
+/// bits so that a resumed run starts from the very same states.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Memory {
+    evaluated: usize,
+    live: Vec<Option<SavedLive>>,
+}
+
+/// A [`Live`] rollout as saved: its sample is redrawn from its origin.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SavedLive {
+    item: usize,
+    rollout: usize,
+    frame: usize,
+    age: usize,
+    prev: Vec<u64>,
+    cur: Vec<u64>,
+}
+
+impl HoodTask {
+    /// A saved rollout back as it was, checked against this run's pool.
+    fn restored(&self, saved: SavedLive) -> std::result::Result<Live, String> {
+        let sample = self.sample(saved.item, saved.rollout);
+        let (mesh, _) = self.garments[sample.garment].variant(sample.open.is_some());
+        let n = mesh.vertex_count();
+        let frames = self.motions[sample.motion].poses.len();
+        if saved.frame == 0 || saved.frame >= frames {
+            return Err(format!(
+                "a kept rollout at frame {} of a {frames}-frame motion",
+                saved.frame
+            ));
+        }
+        let positions = |bits: &[u64]| -> std::result::Result<Vec<[f64; 3]>, String> {
+            if bits.len() != 3 * n {
+                return Err(format!(
+                    "a kept rollout of {} coordinates for a garment of {n} vertices",
+                    bits.len()
+                ));
+            }
+            Ok(bits
+                .chunks_exact(3)
+                .map(|c| std::array::from_fn(|k| f64::from_bits(c[k])))
+                .collect())
+        };
+        Ok(Live {
+            origin: (saved.item, saved.rollout),
+            frame: saved.frame,
+            age: saved.age,
+            state: State {
+                prev: positions(&saved.prev)?,
+                cur: positions(&saved.cur)?,
+            },
+            sample,
+        })
+    }
+}
+
 /// `‖x − target‖²` in cm², the mean over the vertices (pinned ones are exact in both).
 fn solver_loss(x: Tensor<2>, target: &[[f64; 3]], device: &Device) -> Tensor<1> {
     let n = target.len();
@@ -661,9 +813,17 @@ impl TrainTask for HoodTask {
 
     fn losses(&mut self, model: &Hood, item: usize, terms: &[Term]) -> Result<Vec<Tensor<1>>> {
         let rollout = self.stage.rollout;
-        let s = self.sample(item, rollout);
+        let slot = self.evaluated % REPLAY_SLOTS;
+        self.evaluated += 1;
+        let (origin, s, age, start) = match self.replayed(item, slot, rollout) {
+            Some(live) => (live.origin, live.sample, live.age, Some(live.state)),
+            None => ((item, rollout), self.sample(item, rollout), 0, None),
+        };
         let scene = self.scene(&s, rollout + 2)?;
-        let start = scene.start(1, s.at_rest)?;
+        let start = match start {
+            Some(state) => state,
+            None => scene.start(1, s.at_rest)?,
+        };
         let (mut prev, mut cur) = (start.prev, start.cur);
         // Position noise on the free vertices, the same offset at t − 1 and t.
         let mut rng = SplitMix64::new(s.noise_seed);
@@ -746,6 +906,10 @@ impl TrainTask for HoodTask {
                 t += 1;
             }
             cur = next;
+        }
+        if self.training.replay > 0.0 {
+            let state = State { prev, cur };
+            self.live[slot] = self.kept(&scene, origin, s, t, age + rollout, state);
         }
         Ok(sums
             .into_iter()
@@ -859,6 +1023,50 @@ impl TrainTask for HoodTask {
     fn enter_stage(&mut self, model: Hood, stage: &Stage) -> Hood {
         self.stage = stage.clone();
         model
+    }
+    fn memory(&self) -> Option<serde_json::Value> {
+        if self.training.replay <= 0.0 {
+            return None;
+        }
+        let bits = |x: &[[f64; 3]]| x.iter().flatten().map(|v| v.to_bits()).collect();
+        let memory = Memory {
+            evaluated: self.evaluated,
+            live: self
+                .live
+                .iter()
+                .map(|l| {
+                    l.as_ref().map(|l| SavedLive {
+                        item: l.origin.0,
+                        rollout: l.origin.1,
+                        frame: l.frame,
+                        age: l.age,
+                        prev: bits(&l.state.prev),
+                        cur: bits(&l.state.cur),
+                    })
+                })
+                .collect(),
+        };
+        serde_json::to_value(memory).ok()
+    }
+
+    fn restore_memory(&mut self, memory: serde_json::Value) -> std::result::Result<(), String> {
+        let memory: Memory = serde_json::from_value(memory).map_err(|e| e.to_string())?;
+        if memory.live.len() != REPLAY_SLOTS {
+            return Err(format!(
+                "{} kept rollouts (weft keeps {REPLAY_SLOTS})",
+                memory.live.len()
+            ));
+        }
+        let mut live = Vec::with_capacity(REPLAY_SLOTS);
+        for saved in memory.live {
+            live.push(match saved {
+                Some(saved) => Some(self.restored(saved)?),
+                None => None,
+            });
+        }
+        self.evaluated = memory.evaluated;
+        self.live = live;
+        Ok(())
     }
 }
 
@@ -979,5 +1187,51 @@ mod tests {
         let closed = task(true);
         assert!(closed.garments[0].open.is_none());
         assert_eq!(closed.sample(3, 1).open, None);
+    }
+
+    /// `[train] replay`: once every slot holds a rollout, an item that draws a replay
+    /// goes on from its slot's state at the next frame, and a task restored from the
+    /// saved memory evaluates that item to the same bits (a resumed run repeats the
+    /// uninterrupted one). A saved state of the wrong size is refused; without replay
+    /// nothing is kept.
+    #[test]
+    fn replayed_items_go_on_from_kept_rollouts_and_survive_a_checkpoint() {
+        let training = HoodTraining {
+            replay: 1.0,
+            motion_frames: 30,
+            ..small()
+        };
+        let mut t = task_with(training.clone());
+        let model = t.config.init(&t.device).unwrap();
+        let terms = [Term::Stretching, Term::Inertia];
+        for item in 0..REPLAY_SLOTS {
+            t.losses(&model, item, &terms).unwrap();
+        }
+        let kept: Vec<Live> = t.live.iter().map(|l| l.clone().unwrap()).collect();
+        assert!(kept.iter().all(|l| l.age == 1 && l.origin.1 == 1));
+        let memory = t.memory().unwrap();
+        let mut resumed = task_with(training);
+        resumed.restore_memory(memory.clone()).unwrap();
+        assert_eq!(resumed.memory(), Some(memory.clone()));
+
+        let item = 1000;
+        let a = t.losses(&model, item, &terms).unwrap();
+        let b = resumed.losses(&model, item, &terms).unwrap();
+        for (a, b) in a.into_iter().zip(b) {
+            assert_eq!(a.into_data(), b.into_data());
+        }
+        let next = t.live[0].as_ref().unwrap();
+        assert_eq!(
+            next.origin, kept[0].origin,
+            "slot 0 went on with its rollout"
+        );
+        assert_eq!((next.age, next.frame), (2, kept[0].frame + 1));
+        assert_ne!(next.state.cur, kept[0].state.cur);
+
+        let mut bad = memory;
+        bad["live"][0]["cur"].as_array_mut().unwrap().pop();
+        let e = resumed.restore_memory(bad).unwrap_err();
+        assert!(e.contains("coordinates"), "{e}");
+        assert!(task(false).memory().is_none());
     }
 }
