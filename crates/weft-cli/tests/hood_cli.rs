@@ -11,7 +11,9 @@ mod common;
 use common::{garment, s, scratch, stderr, stdout, weft};
 
 /// A config small enough for a debug build: one garment, one shape, a 12-frame walk,
-/// a two-level network of width 8.
+/// a two-level network of width 8. Three items a step and replay always: step 3's last
+/// item goes on with the rollout step 1's first left, so the resume below needs the
+/// kept rollouts from step 2's checkpoint.
 const TINY: &str = r#"
 [model]
 latent = 8
@@ -32,6 +34,8 @@ validation_scenes = 1
 validation_frames = 5
 checkpoint_every = 2
 validate_every = 2
+batch = 3
+replay = 1.0
 "#;
 
 fn train(config: &Path, run: &Path, steps: &str, extra: &[&str]) -> std::process::Output {
