@@ -747,6 +747,12 @@ struct SavedLive {
 impl HoodTask {
     /// A saved rollout back as it was, checked against this run's pool.
     fn restored(&self, saved: SavedLive) -> std::result::Result<Live, String> {
+        if !(1..=self.training.max_rollout).contains(&saved.rollout) {
+            return Err(format!(
+                "a kept rollout started with {} steps (max_rollout is {})",
+                saved.rollout, self.training.max_rollout
+            ));
+        }
         let sample = self.sample(saved.item, saved.rollout);
         let (mesh, _) = self.garments[sample.garment].variant(sample.open.is_some());
         let n = mesh.vertex_count();
@@ -1232,6 +1238,10 @@ mod tests {
         bad["live"][0]["cur"].as_array_mut().unwrap().pop();
         let e = resumed.restore_memory(bad).unwrap_err();
         assert!(e.contains("coordinates"), "{e}");
+        let mut bad = resumed.memory().unwrap();
+        bad["live"][0]["rollout"] = serde_json::json!(1_000_000);
+        let e = resumed.restore_memory(bad).unwrap_err();
+        assert!(e.contains("max_rollout"), "{e}");
         assert!(task(false).memory().is_none());
     }
 }
