@@ -663,6 +663,25 @@ impl HoodTask {
     }
 }
 
+/// [`HoodTask`]'s memory in a checkpoint: its kept rollouts, positions as their `f64`
+/// bits so that a resumed run starts from the very same states.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Memory {
+    evaluated: usize,
+    live: Vec<Option<SavedLive>>,
+}
+
+/// A [`Live`] rollout as saved: its sample is redrawn from its origin.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SavedLive {
+    item: usize,
+    rollout: usize,
+    frame: usize,
+    age: usize,
+    prev: Vec<u64>,
+    cur: Vec<u64>,
+}
+
 impl HoodTask {
     /// The rollout in `slot` for item `item`, moved on so that its window of `rollout`
     /// steps starts at the frame it reached, when the item draws a replay
@@ -723,28 +742,7 @@ impl HoodTask {
             state,
         })
     }
-}
 
-/// [`HoodTask`]'s memory in a checkpoint: its kept rollouts, positions as their `f64`
-/// bits so that a resumed run starts from the very same states.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct Memory {
-    evaluated: usize,
-    live: Vec<Option<SavedLive>>,
-}
-
-/// A [`Live`] rollout as saved: its sample is redrawn from its origin.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct SavedLive {
-    item: usize,
-    rollout: usize,
-    frame: usize,
-    age: usize,
-    prev: Vec<u64>,
-    cur: Vec<u64>,
-}
-
-impl HoodTask {
     /// A saved rollout back as it was, checked against this run's pool.
     fn restored(&self, saved: SavedLive) -> std::result::Result<Live, String> {
         if !(1..=self.training.max_rollout).contains(&saved.rollout) {
