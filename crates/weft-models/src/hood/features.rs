@@ -12,12 +12,19 @@
 //!
 //! Pinned vertices enter with their target at t + 1 as position and `target − x_t` as
 //! velocity, as HOOD does, so the network sees where the pins go.
+//!
+//! With [`HoodConfig::relative_velocity`] (not in HOOD) every node's velocity is taken
+//! relative to the body's mean velocity from t − 1 to t. The potential is the same in
+//! any frame moving at constant velocity (inertia, gravity, friction and collisions
+//! all follow the body), so the step's answer should be too; HOOD's world-frame
+//! velocities instead put a walk at 4 cm and a run at 10 cm per frame, far outside what
+//! in-place motions teach the network (docs/hood.md).
 
 use weft_body::query::{BodyEdgeRule, VertexTree};
 use weft_mesh::vec3::{norm, sub};
 use weft_mesh::vertex_normals_of;
 
-use super::config::widths;
+use super::config::{widths, HoodConfig};
 use super::garment::HoodGarment;
 use crate::error::ModelError;
 
@@ -84,13 +91,14 @@ impl StepGraph {
     }
 
     /// The graph of one step of `garment` in state `state` against `body`, with time
-    /// step `dt` (s) and body edges within `radius` (m).
+    /// step `dt` (s), body edges within `config.body_radius` (m) and velocities as
+    /// `config.relative_velocity` says.
     pub fn build(
         garment: &HoodGarment,
         state: &GarmentStep,
         body: &BodyStep,
         dt: f64,
-        radius: f64,
+        config: &HoodConfig,
     ) -> Result<Self, ModelError> {
         let n = garment.vertex_count();
         for (what, len) in [
@@ -153,7 +161,7 @@ impl StepGraph {
         // Body edges: each garment node's nearest body vertex within the radius.
         let tree = VertexTree::new(body.cur).map_err(|e| ModelError::Body(e.to_string()))?;
         let found = tree
-            .body_edges(&cur, radius, BodyEdgeRule::Nearest)
+            .body_edges(&cur, config.body_radius, BodyEdgeRule::Nearest)
             .map_err(|e| ModelError::Body(e.to_string()))?;
         let found: Vec<_> = found
             .into_iter()
@@ -168,12 +176,22 @@ impl StepGraph {
             }
         }
 
+        let frame = if config.relative_velocity && nb > 0 {
+            let sum = body.cur.iter().zip(body.prev).fold([0.0; 3], |s, (c, p)| {
+                std::array::from_fn(|k| s[k] + (c[k] - p[k]))
+            });
+            sum.map(|x| x / nb as f64)
+        } else {
+            [0.0; 3]
+        };
+        let velocity = |now: [f64; 3], before: [f64; 3]| sub(sub(now, before), frame);
+
         let levels = garment.levels.len();
         let node_width = Self::node_width(levels);
         let mut nodes = Vec::with_capacity((n + body_vertices.len()) * node_width);
         let normals = vertex_normals_of(&cur, &garment.rest.faces);
         for i in 0..n {
-            push3(&mut nodes, sub(cur[i], prev[i]));
+            push3(&mut nodes, velocity(cur[i], prev[i]));
             push3(&mut nodes, normals[i]);
             let pinned = garment.pinned[i];
             nodes.extend([f32::from(!pinned), f32::from(pinned), 0.0]);
@@ -186,7 +204,7 @@ impl StepGraph {
         let body_normals = vertex_normals_of(body.cur, body.faces);
         for &b in &body_vertices {
             let b = b as usize;
-            push3(&mut nodes, sub(body.cur[b], body.prev[b]));
+            push3(&mut nodes, velocity(body.cur[b], body.prev[b]));
             push3(&mut nodes, body_normals[b]);
             nodes.extend([0.0, 0.0, 1.0]);
             nodes.push(dt as f32);
@@ -314,7 +332,7 @@ mod tests {
                     omit: &omit,
                 },
                 1.0 / 30.0,
-                0.03,
+                &HoodConfig::new(),
             )
         };
         let step = build(&prev).unwrap();
@@ -345,5 +363,68 @@ mod tests {
         );
         let bad = build(&prev[1..]);
         assert!(bad.unwrap_err().to_string().contains("t - 1"));
+    }
+
+    /// Relative velocities: the same graph for a scene and for the scene moving at a
+    /// constant velocity, and the garment's velocity is its own minus the body's.
+    #[test]
+    fn relative_velocities_do_not_see_a_uniform_motion() {
+        let g = grid(5, 5, 0.1);
+        let n = g.vertex_count();
+        let garment =
+            HoodGarment::new(&g, 2, &[0], vec![0.01; n], vec![[0.25, 0.5, 0.75]; n]).unwrap();
+        let cur = g.positions.clone();
+        let prev: Vec<[f64; 3]> = cur.iter().map(|p| [p[0], p[1] - 0.01, p[2]]).collect();
+        let c = cur[12];
+        let body_cur = vec![[c[0], c[1], c[2] - 0.01], [c[0] + 0.02, c[1], c[2] - 0.01]];
+        // The body moves 2 cm along z from t - 1 to t, and on to t + 1.
+        let body_prev: Vec<[f64; 3]> = body_cur.iter().map(|p| [p[0], p[1], p[2] - 0.02]).collect();
+        let body_next: Vec<[f64; 3]> = body_cur.iter().map(|p| [p[0], p[1], p[2] + 0.02]).collect();
+        let faces = [[0u32, 1, 0]];
+        let config = HoodConfig::new().with_relative_velocity(true);
+        let build = |shift: [f64; 3], config: &HoodConfig| {
+            // Every position moved by `shift` per frame: t - 1 by nothing, t by one
+            // shift, t + 1 by two.
+            let at = |p: &[[f64; 3]], k: f64| -> Vec<[f64; 3]> {
+                p.iter()
+                    .map(|p| std::array::from_fn(|i| p[i] + k * shift[i]))
+                    .collect()
+            };
+            StepGraph::build(
+                &garment,
+                &GarmentStep {
+                    prev: &at(&prev, 0.0),
+                    cur: &at(&cur, 1.0),
+                    pin_targets: &at(&cur, 2.0),
+                    buttoned: false,
+                },
+                &BodyStep {
+                    prev: &at(&body_prev, 0.0),
+                    cur: &at(&body_cur, 1.0),
+                    next: &at(&body_next, 2.0),
+                    faces: &faces,
+                    omit: &[],
+                },
+                1.0 / 30.0,
+                config,
+            )
+            .unwrap()
+        };
+        let still = build([0.0; 3], &config);
+        let moving = build([0.1, 0.0, -0.05], &config);
+        assert_eq!(still.nodes.len(), moving.nodes.len());
+        for (a, b) in still.nodes.iter().zip(&moving.nodes) {
+            assert!((a - b).abs() < 1e-6, "{a} against {b}");
+        }
+        // Vertex 12 moved 1 cm up while the body moved 2 cm along z.
+        let w = StepGraph::node_width(2);
+        let v = &still.nodes[12 * w..12 * w + 3];
+        assert!(
+            (v[1] - 0.01).abs() < 1e-6 && (v[2] + 0.02).abs() < 1e-6,
+            "{v:?}"
+        );
+        // In the world frame (HOOD's), the uniform motion shows.
+        let world = build([0.1, 0.0, -0.05], &HoodConfig::new());
+        assert!((world.nodes[12 * w] - 0.1).abs() < 1e-6);
     }
 }

@@ -267,7 +267,7 @@ impl Scene {
             faces: &self.faces,
             omit: &self.omit,
         };
-        let graph = StepGraph::build(&self.garment, &garment, &body, at.dt, config.body_radius)?;
+        let graph = StepGraph::build(&self.garment, &garment, &body, at.dt, config)?;
         Ok((graph, Advance::new(&self.garment, &garment)))
     }
 }
