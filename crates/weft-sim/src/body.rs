@@ -28,7 +28,7 @@ use crate::error::SimError;
 pub const DEFAULT_QUERY_RADIUS: f64 = 2e-2;
 
 /// Below this distance (m) the contact direction falls back to the pseudo-normal.
-const ON_SURFACE: f64 = 1e-9;
+pub(crate) const ON_SURFACE: f64 = 1e-9;
 
 /// A posed body mesh prepared for contact queries.
 #[derive(Debug)]
@@ -82,7 +82,7 @@ pub fn check_garment_gap(signed: impl IntoIterator<Item = f64>) -> Result<(), Si
 }
 
 /// The farthest any vertex moved from `before` to `after` (m).
-fn farthest_move(before: &[[f64; 3]], after: &[[f64; 3]]) -> f64 {
+pub(crate) fn farthest_move(before: &[[f64; 3]], after: &[[f64; 3]]) -> f64 {
     before
         .iter()
         .zip(after)
@@ -276,7 +276,7 @@ impl BodyProximity for PosedBody {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A closed, outward-oriented unit UV sphere.

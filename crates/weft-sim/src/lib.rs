@@ -48,6 +48,7 @@ pub mod sequence;
 pub mod solver;
 pub mod sparse;
 pub mod stretch;
+pub mod swept;
 
 #[cfg(test)]
 mod fd_tests;
@@ -80,3 +81,4 @@ pub use sequence::{
 pub use solver::{ClothSimulator, NewtonOptions, PreconditionerKind, SimOptions};
 pub use sparse::{BlockCsr, ElementGather, GatherCache, PatternBuilder};
 pub use stretch::{Stretch, StretchParams};
+pub use swept::SweptBody;

@@ -65,6 +65,12 @@ pub struct HoodConfig {
     /// HOOD, which reads them in the world frame). Off for runs written before it.
     #[config(default = false)]
     pub relative_velocity: bool,
+    /// Contacts of the loss and of the solver's reference step against the body swept
+    /// from t to t + 1 (weft-sim's `SweptBody`; not in HOOD, which pairs the garment at
+    /// t with the body at t + 1 and so lets a fast limb tunnel through the cloth). Off
+    /// for runs written before it.
+    #[config(default = false)]
+    pub swept_contacts: bool,
 }
 
 /// A parsed schedule: for each message-passing step, the mesh levels it reads.
@@ -74,14 +80,19 @@ impl HoodConfig {
     /// The preset `name`: `paper` (seed 004: latent 128, two hidden layers, 15 steps over
     /// the mesh and two coarse levels) or `cpu` (latent 32, one hidden layer, seven steps
     /// over the same levels: a propagation radius of 24 mesh edges instead of 48, so a
-    /// usable model trains on two cores in half an hour).
+    /// usable model trains on two cores in half an hour; no settling step, velocities
+    /// relative to the body and swept contacts, which the broad pool needs:
+    /// docs/hood.md item 9).
     pub fn preset(name: &str) -> Result<Self, ModelError> {
         match name {
             "paper" => Ok(Self::new()),
             "cpu" => Ok(Self::new()
                 .with_latent(32)
                 .with_hidden_layers(1)
-                .with_schedule("0,1 | 1,2 x2 | 2 | 1,2 x2 | 0,1".into())),
+                .with_schedule("0,1 | 1,2 x2 | 2 | 1,2 x2 | 0,1".into())
+                .with_settle_dt(0.0)
+                .with_relative_velocity(true)
+                .with_swept_contacts(true)),
             other => Err(ModelError::Config(format!(
                 "unknown preset `{other}`; expected cpu or paper"
             ))),

@@ -17,7 +17,8 @@ use weft_body::BodyModel;
 use weft_garment::onbody::push_out;
 use weft_mesh::TriMesh;
 use weft_sim::{
-    check_garment_gap, Attachment, ClothModel, ClothSimulator, Material, PosedBody, SimOptions,
+    check_garment_gap, Attachment, BodyProximity, ClothModel, ClothSimulator, Material, PosedBody,
+    SimOptions, SweptBody,
 };
 
 use super::config::HoodConfig;
@@ -134,6 +135,8 @@ pub struct Scene {
     pub dt: f64,
     /// The body surface at rest, rebuilt at each step's pose ([`Scene::posed_body`]).
     rest_body: PosedBody,
+    /// [`HoodConfig::swept_contacts`].
+    swept_contacts: bool,
 }
 
 fn f64s(frame: &[[f32; 3]]) -> Vec<[f64; 3]> {
@@ -203,6 +206,7 @@ impl Scene {
             skinned,
             dt: 1.0 / clip.fps,
             rest_body: rest_surface,
+            swept_contacts: config.swept_contacts,
         })
     }
 
@@ -306,6 +310,22 @@ impl Scene {
         Ok(body)
     }
 
+    /// The body that step `at`'s contacts are found against: [`Scene::posed_body`]
+    /// (HOOD), or with [`HoodConfig::swept_contacts`] the body swept from frame `at.t`
+    /// to its end-of-step state ([`SweptBody`]), so a limb that moves through the cloth
+    /// in one frame pushes it back to the side it was on.
+    pub fn contact_body(&self, at: StepAt) -> Result<Box<dyn BodyProximity + Sync>, ModelError> {
+        if !self.swept_contacts || at.settle {
+            return Ok(Box::new(self.posed_body(at)?));
+        }
+        let sim = |e: weft_sim::SimError| ModelError::Body(format!("the swept body: {e}"));
+        let mut before = self.rest_body.clone();
+        before.rebuild(&self.body[at.t]).map_err(sim)?;
+        let mut after = before.clone();
+        after.refit(&self.body[at.t + 1]).map_err(sim)?;
+        Ok(Box::new(SweptBody::new(before, after).map_err(sim)?))
+    }
+
     /// The step `at` from `state` as weft-sim's implicit Euler takes it (Newton on the
     /// same incremental potential HOOD is trained on, the pinned vertices at their
     /// targets): the reference a HOOD step is measured against.
@@ -324,8 +344,8 @@ impl Scene {
         for (i, _) in self.garment.pinned.iter().enumerate().filter(|(_, &p)| p) {
             solver.move_pin(i as u32, targets[i]).map_err(sim)?;
         }
-        let body = self.posed_body(at)?;
-        solver.step(at.dt, Some(&body)).map_err(sim)?;
+        let body = self.contact_body(at)?;
+        solver.step(at.dt, Some(body.as_ref())).map_err(sim)?;
         Ok(solver.positions().to_vec())
     }
 }
@@ -351,6 +371,44 @@ fn hand_vertices(body: &BodyModel) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A body that moves farther in a frame than it is deep sweeps the front of the
+    /// skirt to its back: HOOD's contact at t + 1 lets it go, the swept body holds it
+    /// in front.
+    #[test]
+    fn swept_contacts_keep_the_cloth_on_its_side_of_a_fast_body() {
+        let (body, skirt) = crate::hood::testutil::body_and_skirt(320);
+        let (poses, mut trans) = crate::hood::testutil::still(3);
+        trans[1] = [0.0, 0.0, 0.35];
+        let clip = Clip {
+            betas: &[],
+            poses: &poses,
+            trans: &trans,
+            fps: 30.0,
+        };
+        let hood = Materials::Uniform(Material::hood());
+        let scene = |swept| {
+            let cfg = HoodConfig::preset("cpu")
+                .unwrap()
+                .with_swept_contacts(swept);
+            Scene::new(&skirt, &body, &clip, &hood, Attachment::TopOpening, &cfg).unwrap()
+        };
+        let at = StepAt {
+            t: 0,
+            settle: false,
+            dt: 1.0 / 30.0,
+            buttoned: true,
+        };
+        let front = (0..skirt.vertex_count())
+            .max_by(|&a, &b| skirt.positions[a][2].total_cmp(&skirt.positions[b][2]))
+            .unwrap();
+        let x = skirt.positions[front];
+        let plain = scene(false).contact_body(at).unwrap().closest(x);
+        assert!(plain.is_none_or(|c| c.normal[2] < 0.0), "{plain:?}");
+        let swept = scene(true).contact_body(at).unwrap().closest(x).unwrap();
+        assert!(swept.normal[2] > 0.5, "{swept:?}");
+        assert!(swept.signed_distance(x) < 0.0, "{swept:?}");
+    }
 
     #[test]
     fn scenes_refuse_a_garment_off_the_body_and_a_bad_material_map() {

@@ -143,15 +143,18 @@ impl HoodTraining {
     }
 
     /// The CPU preset: garments of about 1 000 vertices (skirt, dress, t-shirt), the
-    /// rollout growing every 600 steps.
+    /// rollout growing every 300 steps, the solver's step as a second target and half
+    /// the items going on from earlier rollouts (docs/hood.md items 6, 7 and 9).
     pub fn cpu() -> Self {
         HoodTraining {
             garments: ["skirt", "dress", "tshirt"].map(String::from).to_vec(),
             styles: 3,
             garment_vertices: 1000,
             shapes: 6,
-            rollout_every: 600,
+            rollout_every: 300,
             motion_frames: 90,
+            solver_weight: 1.0,
+            replay: 0.5,
             validation_scenes: 2,
             validation_frames: 45,
             ..HoodTraining::paper()
@@ -308,12 +311,12 @@ impl ModelSettings for HoodConfig {
     }
 
     /// HOOD: Adam 5e-5 halving every 50 000 steps, gradient clipping at norm 1, 150 000
-    /// iterations (`paper`); `cpu`: Adam 1e-3 with cosine decay over 3 000 steps.
+    /// iterations (`paper`); `cpu`: Adam 1e-3 with cosine decay over 1 500 steps.
     fn trainer(name: &str) -> Result<TrainConfig> {
         let base = TrainConfig::preset(name)?;
         let paper = name == "paper";
         Ok(TrainConfig {
-            steps: if paper { 150_000 } else { 3000 },
+            steps: if paper { 150_000 } else { 1500 },
             learning_rate: if paper { 5e-5 } else { 1e-3 },
             min_learning_rate: if paper { 5e-7 } else { 1e-5 },
             optimizer: OptimizerConfig::Adam(AdamParams::default()),
@@ -353,7 +356,7 @@ mod tests {
             .unwrap();
         let t = &cpu.train.task;
         assert_eq!(t.rollout_at(0), 1);
-        assert_eq!(t.rollout_at(600), 2);
+        assert_eq!(t.rollout_at(300), 2);
         assert_eq!(t.rollout_at(100_000), 5);
         assert_eq!(t.collision_level(0, 3000), 0);
         assert_eq!(t.collision_level(3000, 3000), COLLISION_LEVELS);

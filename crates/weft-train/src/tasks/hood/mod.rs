@@ -646,7 +646,7 @@ impl HoodTask {
         at: StepAt,
         collision_weight: f64,
     ) -> Result<Vec<Arc<dyn Energy + Send + Sync>>> {
-        let body = scene.posed_body(at)?;
+        let body = scene.contact_body(at)?;
         let dt = at.dt;
         let target = advance.inertial_target();
         let cloth = scene.cloth_at(at);
@@ -656,7 +656,7 @@ impl HoodTask {
             target: &target,
             dt,
             pinned: &scene.garment.pinned,
-            body: Some(&body),
+            body: Some(body.as_ref()),
             collision_stiffness: Some(stiffness),
         })?;
         Ok(PotentialTerm::all(potential))
@@ -1102,6 +1102,7 @@ mod tests {
             max_rollout: 2,
             validation_scenes: 1,
             validation_frames: 5,
+            replay: 0.0,
             ..HoodTraining::cpu()
         }
     }
