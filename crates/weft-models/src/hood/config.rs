@@ -61,7 +61,7 @@ pub struct HoodConfig {
     /// body edges (HOOD omits the hands "to avoid body self-penetrations").
     #[config(default = true)]
     pub omit_hands: bool,
-    /// Node velocities relative to the body's mean velocity (features module; not in
+    /// Node velocities relative to the body's median velocity (features module; not in
     /// HOOD, which reads them in the world frame). Off for runs written before it.
     #[config(default = false)]
     pub relative_velocity: bool,

@@ -14,7 +14,8 @@
 //! velocity, as HOOD does, so the network sees where the pins go.
 //!
 //! With [`HoodConfig::relative_velocity`] (not in HOOD) every node's velocity is taken
-//! relative to the body's mean velocity from t − 1 to t. The potential is the same in
+//! relative to the body's median velocity from t − 1 to t (per axis, over its vertices:
+//! the bulk of the body, which moving arms or a kicking leg do not shift). The potential is the same in
 //! any frame moving at constant velocity (inertia, gravity, friction and collisions
 //! all follow the body), so the step's answer should be too; HOOD's world-frame
 //! velocities instead put a walk at 4 cm and a run at 10 cm per frame, far outside what
@@ -177,10 +178,13 @@ impl StepGraph {
         }
 
         let frame = if config.relative_velocity && nb > 0 {
-            let sum = body.cur.iter().zip(body.prev).fold([0.0; 3], |s, (c, p)| {
-                std::array::from_fn(|k| s[k] + (c[k] - p[k]))
-            });
-            sum.map(|x| x / nb as f64)
+            // The median, not the mean: raised arms move the body's mean, not its bulk.
+            let mut d: Vec<f64> = Vec::with_capacity(nb);
+            std::array::from_fn(|k| {
+                d.clear();
+                d.extend(body.cur.iter().zip(body.prev).map(|(c, p)| c[k] - p[k]));
+                *d.select_nth_unstable_by(nb / 2, f64::total_cmp).1
+            })
         } else {
             [0.0; 3]
         };
@@ -376,11 +380,18 @@ mod tests {
         let cur = g.positions.clone();
         let prev: Vec<[f64; 3]> = cur.iter().map(|p| [p[0], p[1] - 0.01, p[2]]).collect();
         let c = cur[12];
-        let body_cur = vec![[c[0], c[1], c[2] - 0.01], [c[0] + 0.02, c[1], c[2] - 0.01]];
-        // The body moves 2 cm along z from t - 1 to t, and on to t + 1.
-        let body_prev: Vec<[f64; 3]> = body_cur.iter().map(|p| [p[0], p[1], p[2] - 0.02]).collect();
+        let body_cur = vec![
+            [c[0], c[1], c[2] - 0.01],
+            [c[0] + 0.02, c[1], c[2] - 0.01],
+            [5.0, 5.0, 5.0],
+        ];
+        // The body moves 2 cm along z from t - 1 to t, and on to t + 1; its far vertex
+        // (an arm) 50 cm, which does not move the median.
+        let mut body_prev: Vec<[f64; 3]> =
+            body_cur.iter().map(|p| [p[0], p[1], p[2] - 0.02]).collect();
+        body_prev[2][2] = 4.5;
         let body_next: Vec<[f64; 3]> = body_cur.iter().map(|p| [p[0], p[1], p[2] + 0.02]).collect();
-        let faces = [[0u32, 1, 0]];
+        let faces = [[0u32, 1, 2]];
         let config = HoodConfig::new().with_relative_velocity(true);
         let build = |shift: [f64; 3], config: &HoodConfig| {
             // Every position moved by `shift` per frame: t - 1 by nothing, t by one

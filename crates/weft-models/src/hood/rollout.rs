@@ -173,7 +173,10 @@ fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Opt
 /// comes from frames `t − 1` and `t` and the body at `t − 1`, `t`, `t + 1`. After the
 /// settling step the garment starts at rest (zero velocity): HOOD's code feeds the
 /// settling displacement, taken over 1/3 s, in as the next step's per-frame velocity,
-/// ten times too fast for a 1/30 s step.
+/// ten times too fast for a 1/30 s step. Without one it starts with the skinned
+/// garment's velocity from frame 0 to 1: a motion that starts mid-stride would
+/// otherwise meet a garment at rest with a body moving at full speed, and a run's
+/// thighs go through the front of a skirt in the first step (docs/hood.md item 9).
 pub fn roll_out(
     model: &Hood,
     stats: &HoodStats,
@@ -204,6 +207,21 @@ pub fn roll_out(
     } else {
         starts.into_iter().map(|s| s.cur).collect()
     };
+    // Frame -1 of each scene: frame 0 less the skinned garment's first displacement.
+    let before: Vec<Vec<[f64; 3]>> = scenes
+        .iter()
+        .zip(&settled)
+        .map(|(s, x)| {
+            if config.settle_dt > 0.0 {
+                return x.clone();
+            }
+            let (s0, s1) = (s.pin_targets(0), s.pin_targets(1));
+            x.iter()
+                .zip(s0.iter().zip(&s1))
+                .map(|(p, (a, b))| std::array::from_fn(|k| p[k] - (b[k] - a[k])))
+                .collect()
+        })
+        .collect();
     let mut out: Vec<Rollout> = settled
         .into_iter()
         .map(|x| Rollout {
@@ -223,7 +241,7 @@ pub fn roll_out(
         for &k in &active {
             let frames = &out[k].frames;
             let cur = &frames[t];
-            let prev = if t == 0 { cur } else { &frames[t - 1] };
+            let prev = if t == 0 { &before[k] } else { &frames[t - 1] };
             let at = StepAt {
                 t,
                 settle: false,
@@ -250,6 +268,43 @@ mod tests {
     use weft_mesh::primitives::grid;
     use weft_nn::backend::cpu;
     use weft_nn::FeatureNormalizer;
+
+    /// An untrained network predicts no acceleration, so frame 1 shows the velocity the
+    /// rollout starts with: the skinned garment's without a settling step, none after
+    /// one.
+    #[test]
+    fn without_a_settling_step_the_garment_starts_with_the_body() {
+        use crate::hood::{HoodStats, Materials, Scene};
+        use weft_sim::{Attachment, Material};
+        let (body, skirt) = crate::hood::testutil::body_and_skirt(320);
+        let (poses, mut trans) = crate::hood::testutil::still(3);
+        for (t, x) in trans.iter_mut().enumerate() {
+            x[2] = 0.05 * t as f32;
+        }
+        let clip = crate::deformer::Clip {
+            betas: &[],
+            poses: &poses,
+            trans: &trans,
+            fps: 30.0,
+        };
+        let device = cpu();
+        let hood = Materials::Uniform(Material::hood());
+        for (settle_dt, want) in [(0.0, 0.05), (1.0 / 3.0, 0.0)] {
+            let config = HoodConfig::preset("cpu").unwrap().with_settle_dt(settle_dt);
+            let model = config.init(&device).unwrap();
+            let stats = HoodStats::identity(config.levels);
+            let scene =
+                Scene::new(&skirt, &body, &clip, &hood, Attachment::TopOpening, &config).unwrap();
+            let options = RolloutOptions::default();
+            let r = roll_out(&model, &stats, &config, &[&scene], &options, &device).unwrap();
+            let free = scene.garment.pinned.iter().position(|&p| !p).unwrap();
+            let moved = r[0].frames[1][free][2] - r[0].frames[0][free][2];
+            assert!(
+                (moved - want).abs() < 1e-4,
+                "settle_dt {settle_dt}: {moved}"
+            );
+        }
+    }
 
     #[test]
     fn free_vertices_take_the_acceleration_and_pins_their_target() {
