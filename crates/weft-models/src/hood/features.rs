@@ -296,14 +296,22 @@ mod tests {
     use super::*;
     use weft_mesh::primitives::grid;
 
-    #[test]
-    fn features_follow_the_state_and_the_body() {
+    /// A 5 × 5 grid garment of two levels, vertex 0 pinned, and its positions at t and
+    /// at t − 1 (1 cm lower).
+    fn grid_garment() -> (HoodGarment, Vec<[f64; 3]>, Vec<[f64; 3]>) {
         let g = grid(5, 5, 0.1);
         let n = g.vertex_count();
         let garment =
             HoodGarment::new(&g, 2, &[0], vec![0.01; n], vec![[0.25, 0.5, 0.75]; n]).unwrap();
         let cur = g.positions.clone();
-        let prev: Vec<[f64; 3]> = cur.iter().map(|p| [p[0], p[1] - 0.01, p[2]]).collect();
+        let prev = cur.iter().map(|p| [p[0], p[1] - 0.01, p[2]]).collect();
+        (garment, cur, prev)
+    }
+
+    #[test]
+    fn features_follow_the_state_and_the_body() {
+        let (garment, cur, prev) = grid_garment();
+        let n = garment.vertex_count();
         let mut targets = cur.clone();
         targets[0] = [cur[0][0], cur[0][1] + 0.02, cur[0][2]];
         // A body of three vertices: one 1 cm under vertex 12, one far, one omitted.
@@ -373,12 +381,7 @@ mod tests {
     /// constant velocity, and the garment's velocity is its own minus the body's.
     #[test]
     fn relative_velocities_do_not_see_a_uniform_motion() {
-        let g = grid(5, 5, 0.1);
-        let n = g.vertex_count();
-        let garment =
-            HoodGarment::new(&g, 2, &[0], vec![0.01; n], vec![[0.25, 0.5, 0.75]; n]).unwrap();
-        let cur = g.positions.clone();
-        let prev: Vec<[f64; 3]> = cur.iter().map(|p| [p[0], p[1] - 0.01, p[2]]).collect();
+        let (garment, cur, prev) = grid_garment();
         let c = cur[12];
         let body_cur = vec![
             [c[0], c[1], c[2] - 0.01],
