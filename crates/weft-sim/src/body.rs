@@ -15,7 +15,7 @@
 //! barycentric coordinates): the anchor of HOOD's friction term on a moving body.
 
 use rayon::prelude::*;
-use weft_body::query::BodySurface;
+use weft_body::query::{BodySurface, ClosestPoint};
 use weft_mesh::vec3::{dist, is_finite, scale, sub};
 
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -28,7 +28,7 @@ use crate::error::SimError;
 pub const DEFAULT_QUERY_RADIUS: f64 = 2e-2;
 
 /// Below this distance (m) the contact direction falls back to the pseudo-normal.
-pub(crate) const ON_SURFACE: f64 = 1e-9;
+const ON_SURFACE: f64 = 1e-9;
 
 /// A posed body mesh prepared for contact queries.
 #[derive(Debug)]
@@ -79,6 +79,17 @@ pub fn check_garment_gap(signed: impl IntoIterator<Item = f64>) -> Result<(), Si
         });
     }
     Ok(())
+}
+
+/// The outward contact normal of `x` at its closest point `c` (module documentation):
+/// the direction of the signed distance's gradient, or the pseudo-normal on the surface.
+pub(crate) fn contact_normal(x: [f64; 3], c: &ClosestPoint) -> [f64; 3] {
+    if c.distance > ON_SURFACE {
+        let s = if c.signed_distance < 0.0 { -1.0 } else { 1.0 };
+        scale(sub(x, c.point), s / c.distance)
+    } else {
+        c.normal
+    }
 }
 
 /// The farthest any vertex moved from `before` to `after` (m).
@@ -219,16 +230,10 @@ impl PosedBody {
             }
             Err(_) => return Err(0.0),
         };
-        let normal = if c.distance > ON_SURFACE {
-            let s = if c.signed_distance < 0.0 { -1.0 } else { 1.0 };
-            scale(sub(x, c.point), s / c.distance)
-        } else {
-            c.normal
-        };
         Ok((
             BodyContact {
                 point: c.point,
-                normal,
+                normal: contact_normal(x, &c),
             },
             c.triangle,
             c.barycentric,

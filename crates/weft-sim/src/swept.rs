@@ -19,7 +19,7 @@
 
 use weft_mesh::vec3::{add, cross, dot, normalize_or_zero, scale, sub};
 
-use crate::body::{farthest_move, PosedBody, ON_SURFACE};
+use crate::body::{contact_normal, farthest_move, PosedBody};
 use crate::contact::{BodyContact, BodyProximity, Proximity};
 use crate::error::SimError;
 
@@ -78,12 +78,7 @@ impl SweptBody {
             corners(self.after.surface().positions()),
         );
         let point = (0..3).fold([0.0; 3], |s, k| add(s, scale(to[k], c.barycentric[k])));
-        let normal = if c.distance > ON_SURFACE {
-            scale(sub(x, c.point), 1.0 / c.distance)
-        } else {
-            c.normal
-        };
-        let normal = turned(normal, face_normal(from), face_normal(to));
+        let normal = turned(contact_normal(x, &c), face_normal(from), face_normal(to));
         Some((BodyContact { point, normal }, sub(point, c.point)))
     }
 }

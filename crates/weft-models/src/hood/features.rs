@@ -15,11 +15,11 @@
 //!
 //! With [`HoodConfig::relative_velocity`] (not in HOOD) every node's velocity is taken
 //! relative to the body's median velocity from t − 1 to t (per axis, over its vertices:
-//! the bulk of the body, which moving arms or a kicking leg do not shift). The potential is the same in
-//! any frame moving at constant velocity (inertia, gravity, friction and collisions
-//! all follow the body), so the step's answer should be too; HOOD's world-frame
-//! velocities instead put a walk at 4 cm and a run at 10 cm per frame, far outside what
-//! in-place motions teach the network (docs/hood.md).
+//! the bulk of the body, which moving arms or a kicking leg do not shift). The
+//! potential is the same in any frame moving at constant velocity (inertia, gravity,
+//! friction and collisions all follow the body), so the step's answer should be too;
+//! HOOD's world-frame velocities instead put a walk at 4 cm and a run at 10 cm per
+//! frame, far outside what in-place motions teach the network (docs/hood.md).
 
 use weft_body::query::{BodyEdgeRule, VertexTree};
 use weft_mesh::vec3::{norm, sub};

@@ -319,8 +319,7 @@ impl Scene {
             return Ok(Box::new(self.posed_body(at)?));
         }
         let sim = |e: weft_sim::SimError| ModelError::Body(format!("the swept body: {e}"));
-        let mut before = self.rest_body.clone();
-        before.rebuild(&self.body[at.t]).map_err(sim)?;
+        let before = self.posed_body(StepAt { settle: true, ..at })?;
         let mut after = before.clone();
         after.refit(&self.body[at.t + 1]).map_err(sim)?;
         Ok(Box::new(SweptBody::new(before, after).map_err(sim)?))
