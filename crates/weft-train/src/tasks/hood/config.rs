@@ -74,6 +74,12 @@ pub struct HoodTraining {
     /// implicit step slowly; the step itself, solved by Newton on the same potential, is
     /// a well-conditioned target (docs/hood.md).
     pub solver_weight: f64,
+    /// Weight of the distance between the predicted and the implicit step's edge vectors
+    /// (cm², mean over the mesh edges). The position distance above is dominated by
+    /// smooth, garment-wide errors; a vertex-to-vertex jitter of a few millimetres, which
+    /// is what a rollout's edge strain is made of, hardly shows in it. Edge vectors see
+    /// only the relative error (docs/hood.md item 10). 0: no such term (HOOD).
+    pub solver_edge_weight: f64,
     /// Probability that an item goes on with a rollout an earlier item left (the
     /// model's own predicted state, its garment, motion and material, from the frame it
     /// reached) instead of starting from the skinned garment. 0 is HOOD: every item
@@ -135,6 +141,7 @@ impl HoodTraining {
             open_front: 0.0,
             random_centres: true,
             solver_weight: 0.0,
+            solver_edge_weight: 0.0,
             replay: 0.0,
             replay_frames: 60,
             validation_scenes: 4,
@@ -239,12 +246,13 @@ impl HoodTraining {
                 return Err(TrainError::config(field, v, "a positive number"));
             }
         }
-        if !(self.solver_weight.is_finite() && self.solver_weight >= 0.0) {
-            return Err(TrainError::config(
-                "train.solver_weight",
-                self.solver_weight,
-                "a weight >= 0",
-            ));
+        for (field, v) in [
+            ("train.solver_weight", self.solver_weight),
+            ("train.solver_edge_weight", self.solver_edge_weight),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(TrainError::config(field, v, "a weight >= 0"));
+            }
         }
         if !(self.noise.is_finite() && self.noise >= 0.0) {
             return Err(TrainError::config(

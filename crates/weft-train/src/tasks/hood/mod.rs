@@ -38,7 +38,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
-use burn::tensor::{Device, Tensor};
+use burn::tensor::{Device, Int, Tensor};
 use weft_body::{BodyModel, Pose};
 use weft_garment::{FitBody, Garment, GarmentKind, Style};
 use weft_mesh::eccentricity::component_center_sets;
@@ -51,6 +51,7 @@ use weft_models::hood::{
 };
 use weft_models::Clip;
 use weft_motion::{MotionKind, ProceduralParams};
+use weft_nn::adjacency::index_tensor;
 use weft_sim::{sample_hood_material, Attachment, Energy, Material, StepInputs};
 
 pub use config::{HoodRun, HoodTraining, COLLISION_LEVELS, OPEN_FRONT_BUTTONS};
@@ -109,6 +110,9 @@ pub enum Term {
     /// The distance to weft-sim's implicit step from the same state (cm², mean over the
     /// vertices): the potential's minimiser as a target, see [`HoodTraining::solver_weight`].
     Solver,
+    /// The distance to the implicit step's edge vectors (cm², mean over the mesh edges),
+    /// see [`HoodTraining::solver_edge_weight`].
+    SolverEdges,
 }
 
 impl Term {
@@ -135,6 +139,7 @@ impl LossTerm for Term {
             Term::Friction => "friction",
             Term::Buttons => "buttons",
             Term::Solver => "solver",
+            Term::SolverEdges => "solver_edges",
         }
     }
 }
@@ -787,15 +792,43 @@ impl HoodTask {
 }
 
 /// `‖x − target‖²` in cm², the mean over the vertices (pinned ones are exact in both).
-fn solver_loss(x: Tensor<2>, target: &[[f64; 3]], device: &Device) -> Tensor<1> {
-    let n = target.len();
-    let flat: Vec<f32> = target.iter().flatten().map(|&v| v as f32).collect();
-    let t = Tensor::<2>::from_data(burn::tensor::TensorData::new(flat, [n, 3]), device);
-    let d = (x - t).mul_scalar(100.0);
-    (d.clone() * d)
-        .sum()
-        .div_scalar(n.max(1) as f64)
-        .reshape([1])
+fn solver_loss(x: Tensor<2>, target: Tensor<2>) -> Tensor<1> {
+    squared_cm(x - target)
+}
+
+/// `‖(x_b − x_a) − (t_b − t_a)‖²` in cm², the mean over the directed edges `(a, b)`.
+fn solver_edge_loss(x: Tensor<2>, target: Tensor<2>, edges: &EdgeIndex) -> Tensor<1> {
+    let d = x - target;
+    squared_cm(d.clone().select(0, edges.b.clone()) - d.select(0, edges.a.clone()))
+}
+
+/// The mean over rows of the squared norm of `d` (m), in cm².
+fn squared_cm(d: Tensor<2>) -> Tensor<1> {
+    let rows = d.dims()[0].max(1) as f64;
+    let d = d.mul_scalar(100.0);
+    (d.clone() * d).sum().div_scalar(rows).reshape([1])
+}
+
+/// Host positions as a `[N, 3]` tensor.
+fn positions_tensor(x: &[[f64; 3]], device: &Device) -> Tensor<2> {
+    let flat: Vec<f32> = x.iter().flatten().map(|&v| v as f32).collect();
+    Tensor::<2>::from_data(burn::tensor::TensorData::new(flat, [x.len(), 3]), device)
+}
+
+/// The mesh edges' end points as index tensors.
+struct EdgeIndex {
+    a: Tensor<1, Int>,
+    b: Tensor<1, Int>,
+}
+
+impl EdgeIndex {
+    fn new(edges: &[[u32; 2]], device: &Device) -> Self {
+        let pick = |k: usize| index_tensor(&edges.iter().map(|e| e[k]).collect::<Vec<_>>(), device);
+        EdgeIndex {
+            a: pick(0),
+            b: pick(1),
+        }
+    }
 }
 
 impl TrainTask for HoodTask {
@@ -811,6 +844,9 @@ impl TrainTask for HoodTask {
         let mut terms: Vec<(Term, f64)> = Term::POTENTIAL.iter().map(|&t| (t, 1.0)).collect();
         if self.training.solver_weight > 0.0 {
             terms.push((Term::Solver, self.training.solver_weight));
+        }
+        if self.training.solver_edge_weight > 0.0 {
+            terms.push((Term::SolverEdges, self.training.solver_edge_weight));
         }
         terms
     }
@@ -842,6 +878,9 @@ impl TrainTask for HoodTask {
             }
         }
         let weight = self.training.collision_weight(self.stage.collision);
+        let edges = terms
+            .contains(&Term::SolverEdges)
+            .then(|| EdgeIndex::new(&scene.garment.levels[0], &self.device));
         let mut sums: Vec<Option<Tensor<1>>> = vec![None; terms.len()];
         let mut t = 1;
         for k in 0..rollout {
@@ -867,35 +906,47 @@ impl TrainTask for HoodTask {
             let n = graph.garment_nodes;
             let potential = self.potential_terms(&scene, &cur, &advance, at, weight)?;
             let x3 = x.clone().reshape([1, n, 3]);
+            // The implicit step from the same state, once for both solver terms.
+            let target = if terms.contains(&Term::Solver) || edges.is_some() {
+                Some(positions_tensor(
+                    &scene.implicit_step(state, at)?,
+                    &self.device,
+                ))
+            } else {
+                None
+            };
             for (slot, term) in sums.iter_mut().zip(terms) {
-                let loss = if *term == Term::Solver {
-                    let target = scene.implicit_step(state, at)?;
-                    solver_loss(x.clone(), &target, &self.device)
-                } else {
-                    let index = Term::POTENTIAL.iter().position(|a| a == term).unwrap_or(0);
-                    let energy = match potential.get(index) {
-                        Some(energy) => energy.clone(),
-                        // The potential holds the buttons only while there are some.
-                        None if *term == Term::Buttons => {
-                            *slot = Some(
-                                slot.take()
-                                    .unwrap_or_else(|| Tensor::<1>::zeros([1], &self.device)),
-                            );
-                            continue;
-                        }
-                        None => {
-                            return Err(TrainError::config(
-                                "train",
-                                term.name(),
-                                "a term of the potential",
-                            ))
-                        }
-                    };
-                    physics_loss(
-                        x3.clone(),
-                        &Arc::new(FrameEnergies::per_frame(vec![energy])?),
-                        PhysicsImpl::Auto,
-                    )?
+                let loss = match (term, &target, &edges) {
+                    (Term::Solver, Some(target), _) => solver_loss(x.clone(), target.clone()),
+                    (Term::SolverEdges, Some(target), Some(edges)) => {
+                        solver_edge_loss(x.clone(), target.clone(), edges)
+                    }
+                    _ => {
+                        let index = Term::POTENTIAL.iter().position(|a| a == term).unwrap_or(0);
+                        let energy = match potential.get(index) {
+                            Some(energy) => energy.clone(),
+                            // The potential holds the buttons only while there are some.
+                            None if *term == Term::Buttons => {
+                                *slot = Some(
+                                    slot.take()
+                                        .unwrap_or_else(|| Tensor::<1>::zeros([1], &self.device)),
+                                );
+                                continue;
+                            }
+                            None => {
+                                return Err(TrainError::config(
+                                    "train",
+                                    term.name(),
+                                    "a term of the potential",
+                                ))
+                            }
+                        };
+                        physics_loss(
+                            x3.clone(),
+                            &Arc::new(FrameEnergies::per_frame(vec![energy])?),
+                            PhysicsImpl::Auto,
+                        )?
+                    }
                 };
                 *slot = Some(match slot.take() {
                     Some(s) => s + loss,
@@ -1192,6 +1243,70 @@ mod tests {
         let closed = task(true);
         assert!(closed.garments[0].open.is_none());
         assert_eq!(closed.sample(3, 1).open, None);
+    }
+
+    fn scalar(t: Tensor<1>) -> f64 {
+        t.into_data()
+            .convert::<f64>()
+            .try_into_vec::<f64>()
+            .unwrap()[0]
+    }
+
+    /// The edge term sees only relative error: a prediction shifted as a whole from the
+    /// implicit step costs nothing in it (and 1 cm² in the position term), one vertex
+    /// off by 1 cm costs 1 cm² on each directed edge it ends, averaged over the edges.
+    #[test]
+    fn solver_edge_loss_measures_relative_error_only() {
+        let device = weft_nn::backend::cpu();
+        // A triangle and a pendant vertex: edges 0–1, 1–2, 2–0, 2–3, both directions.
+        let edges: Vec<[u32; 2]> = [[0, 1], [1, 2], [2, 0], [2, 3]]
+            .iter()
+            .flat_map(|&[a, b]| [[a, b], [b, a]])
+            .collect();
+        let index = EdgeIndex::new(&edges, &device);
+        let target = [
+            [0.0, 0.0, 0.0],
+            [0.1, 0.0, 0.0],
+            [0.0, 0.1, 0.0],
+            [0.0, 0.2, 0.0],
+        ];
+        let value = scalar;
+        let shifted: Vec<[f64; 3]> = target.iter().map(|p| [p[0], p[1], p[2] + 0.01]).collect();
+        let (x, t) = (
+            positions_tensor(&shifted, &device),
+            positions_tensor(&target, &device),
+        );
+        assert!(value(solver_edge_loss(x.clone(), t.clone(), &index)).abs() < 1e-9);
+        assert!((value(solver_loss(x, t.clone())) - 1.0).abs() < 1e-4);
+        let mut moved = target.to_vec();
+        moved[2][0] += 0.01;
+        let x = positions_tensor(&moved, &device);
+        // Vertex 2 ends 3 of the 4 undirected edges: 6 of the 8 directed ones.
+        let expected = 6.0 / 8.0;
+        assert!((value(solver_edge_loss(x.clone(), t.clone(), &index)) - expected).abs() < 1e-4);
+        assert!((value(solver_loss(x, t)) - 0.25).abs() < 1e-4);
+    }
+
+    /// `[train] solver_edge_weight` adds the edge term; an item's losses include it,
+    /// finite and above zero for an untrained network.
+    #[test]
+    fn the_solver_edge_term_enters_the_loss_when_weighted() {
+        let mut t = task_with(HoodTraining {
+            solver_edge_weight: 2.0,
+            ..small()
+        });
+        let terms = t.terms(&Stage::default());
+        assert!(terms.contains(&(Term::SolverEdges, 2.0)), "{terms:?}");
+        assert!(!task(false)
+            .terms(&Stage::default())
+            .iter()
+            .any(|(t, _)| *t == Term::SolverEdges));
+        let model = t.config.init(&t.device).unwrap();
+        let names: Vec<Term> = terms.iter().map(|(t, _)| *t).collect();
+        let losses = t.losses(&model, 0, &names).unwrap();
+        let at = names.iter().position(|t| *t == Term::SolverEdges).unwrap();
+        let edge = scalar(losses[at].clone());
+        assert!(edge.is_finite() && edge > 0.0, "{edge}");
     }
 
     /// `[train] replay`: once every slot holds a rollout, an item that draws a replay
