@@ -150,8 +150,9 @@ impl HoodTraining {
     }
 
     /// The CPU preset: garments of about 1 000 vertices (skirt, dress, t-shirt), the
-    /// rollout growing every 300 steps, the solver's step as a second target and half
-    /// the items going on from earlier rollouts (docs/hood.md items 6, 7 and 9).
+    /// rollout growing every 300 steps, the solver's step and its edge vectors as
+    /// targets and half the items going on from earlier rollouts (docs/hood.md items 6,
+    /// 7, 9 and 10).
     pub fn cpu() -> Self {
         HoodTraining {
             garments: ["skirt", "dress", "tshirt"].map(String::from).to_vec(),
@@ -161,6 +162,7 @@ impl HoodTraining {
             rollout_every: 300,
             motion_frames: 90,
             solver_weight: 1.0,
+            solver_edge_weight: 30.0,
             replay: 0.5,
             validation_scenes: 2,
             validation_frames: 45,

@@ -1287,8 +1287,8 @@ mod tests {
         assert!((value(solver_loss(x, t)) - 0.25).abs() < 1e-4);
     }
 
-    /// `[train] solver_edge_weight` adds the edge term; an item's losses include it,
-    /// finite and above zero for an untrained network.
+    /// `[train] solver_edge_weight` adds the edge term (0 leaves it out); an item's
+    /// losses include it, finite and above zero for an untrained network.
     #[test]
     fn the_solver_edge_term_enters_the_loss_when_weighted() {
         let mut t = task_with(HoodTraining {
@@ -1297,7 +1297,11 @@ mod tests {
         });
         let terms = t.terms(&Stage::default());
         assert!(terms.contains(&(Term::SolverEdges, 2.0)), "{terms:?}");
-        assert!(!task(false)
+        let without = task_with(HoodTraining {
+            solver_edge_weight: 0.0,
+            ..small()
+        });
+        assert!(!without
             .terms(&Stage::default())
             .iter()
             .any(|(t, _)| *t == Term::SolverEdges));
