@@ -151,8 +151,8 @@ impl HoodTraining {
 
     /// The CPU preset: garments of about 1 000 vertices (skirt, dress, t-shirt), the
     /// rollout growing every 300 steps, the solver's step and its edge vectors as
-    /// targets and half the items going on from earlier rollouts (docs/hood.md items 6,
-    /// 7, 9 and 10).
+    /// targets, half the items going on from earlier rollouts, and the collision term
+    /// at full weight from 40 % of the run (docs/hood.md items 6, 7, 9 and 10).
     pub fn cpu() -> Self {
         HoodTraining {
             garments: ["skirt", "dress", "tshirt"].map(String::from).to_vec(),
@@ -163,6 +163,7 @@ impl HoodTraining {
             motion_frames: 90,
             solver_weight: 1.0,
             solver_edge_weight: 30.0,
+            collision_ramp: [0.2, 0.4],
             replay: 0.5,
             validation_scenes: 2,
             validation_frames: 45,
