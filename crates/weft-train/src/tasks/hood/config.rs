@@ -403,6 +403,13 @@ mod tests {
                 },
                 "train.noise",
             ),
+            (
+                HoodTraining {
+                    solver_edge_weight: f64::NAN,
+                    ..HoodTraining::cpu()
+                },
+                "train.solver_edge_weight",
+            ),
         ] {
             let e = bad.validate_values().unwrap_err().to_string();
             assert!(e.contains(field), "{e}");
