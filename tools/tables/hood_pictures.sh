@@ -1,18 +1,20 @@
 #!/usr/bin/env bash
 # A HOOD rollout beside weft simulate's for the same input: an unseen skirt on the
 # default body walking, frames 0, 10, 20, 30 and 39, each over its posed body (top row
-# simulated, bottom row HOOD), with each row's mean edge strain over all frames printed.
+# simulated, then HOOD), with each row's mean edge strain over all frames printed.
+# With OPTIONS (extra `weft animate` flags, e.g. '--strain-limit 10 --push-out 2'), a
+# third row rolls the same run out with them.
 #
 #   tools/tables/hood_pictures.sh RUN OUT.png [GARMENT.obj]
 #
 # Environment: WEFT (default `weft`), KIND (skirt), VERTICES (1000), MOTION (walk),
-# SEED (3), MATERIAL (hood). Needs python3 with Pillow.
+# SEED (3), MATERIAL (hood), OPTIONS (none). Needs python3 with Pillow.
 set -euo pipefail
 
 run=$1 out=$2 garment=${3:-}
 weft=${WEFT:-weft}
 kind=${KIND:-skirt} vertices=${VERTICES:-1000} motion=${MOTION:-walk} seed=${SEED:-3}
-material=${MATERIAL:-hood}
+material=${MATERIAL:-hood} options=${OPTIONS:-}
 frames=(0 10 20 30 39)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -25,22 +27,34 @@ fi
     --obj --out "$tmp/sim" >/dev/null
 "$weft" animate "$run" --garment "$garment" --motion "$tmp/motion.npz" --material "$material" \
     --format obj --out "$tmp/hood" >/dev/null || echo "HOOD's rollout stopped early (see above)" >&2
+if [[ -n "$options" ]]; then
+    # shellcheck disable=SC2086 # OPTIONS is a list of flags
+    "$weft" animate "$run" --garment "$garment" --motion "$tmp/motion.npz" --material "$material" \
+        --format obj --out "$tmp/corrected" $options >/dev/null ||
+        echo "HOOD's rollout with $options stopped early (see above)" >&2
+fi
 row() {
-    local dir=$1 title=$2
+    local dir=$1 title=$2 name=$3
     local files=($(ls "$dir"/*.obj | sort))
     for t in "${frames[@]}"; do
         [[ $t -lt ${#files[@]} ]] || continue
         "$weft" body pose --motion "$tmp/motion.npz" --frame "$t" --out "$tmp/body$t.obj" >/dev/null
         "$weft" render "${files[$t]}" --body "$tmp/body$t.obj" --camera front --size 420 \
-            --title "$title, frame $t" --out "$tmp/$title-$t.png" >/dev/null
-        echo "$tmp/$title-$t.png"
+            --title "$title, frame $t" --out "$tmp/$name-$t.png" >/dev/null
+        echo "$tmp/$name-$t.png"
     done
 }
-top=$(row "$tmp/sim/obj" simulated)
-bottom=$(row "$tmp/hood" HOOD)
-python3 - "$out" "$garment" "$tmp/sim/obj" "$tmp/hood" <<PY
+top=$(row "$tmp/sim/obj" simulated sim)
+bottom=$(row "$tmp/hood" HOOD hood)
+rows=("$top" "$bottom")
+dirs=("$tmp/sim/obj" "$tmp/hood")
+if [[ -n "$options" ]]; then
+    rows+=("$(row "$tmp/corrected" "HOOD $options" corrected)")
+    dirs+=("$tmp/corrected")
+fi
+python3 - "$out" "$garment" "${dirs[@]}" <<PY
 import math, os, sys
-out, garment, sim, hood = sys.argv[1:5]
+out, garment = sys.argv[1:3]
 def load(p):
     v, f = [], []
     for l in open(p):
@@ -50,12 +64,12 @@ def load(p):
     return v, f
 rest, faces = load(garment)
 edges = {tuple(sorted(e)) for f in faces for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
-for name, d in (("simulated", sim), ("HOOD", hood)):
+for name, d in zip(("simulated", "HOOD", "HOOD with the options"), sys.argv[3:]):
     s = []
     for p in sorted(os.listdir(d)):
         v, _ = load(os.path.join(d, p))
         s += [abs(math.dist(v[a], v[b]) / math.dist(rest[a], rest[b]) - 1) for a, b in edges]
     print(f"{name}: {len(os.listdir(d))} frames, mean edge strain {100 * sum(s) / max(len(s), 1):.2f} %")
 PY
-python3 "$(dirname "$0")/contact_sheet.py" "$out" "$top" "$bottom"
+python3 "$(dirname "$0")/contact_sheet.py" "$out" "${rows[@]}"
 echo "wrote $out"

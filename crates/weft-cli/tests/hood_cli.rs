@@ -195,6 +195,25 @@ fn hood_trains_resumes_and_animates() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
 
+    // The run-time corrections: reported, and they change the frames.
+    let corrected = dir.join("corrected.pc2");
+    let o = anim(
+        &["--strain-limit", "5", "--push-out", "2", "--json"],
+        &corrected,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let c = &report["rollout_corrections"];
+    assert!(
+        c["edges_limited"].is_u64() && c["vertices_projected"].is_u64(),
+        "{report}"
+    );
+    assert!(report["pushed_out_vertices"].is_null(), "{report}");
+    assert_ne!(
+        std::fs::read(&plain).unwrap(),
+        std::fs::read(&corrected).unwrap()
+    );
+
     // Bad input: named, non-zero, nothing written.
     let short = dir.join("short.npy");
     write_npy(&short, &[3], &[0i64, 1, 0]).unwrap();
@@ -207,6 +226,7 @@ fn hood_trains_resumes_and_animates() {
         ),
         (vec!["--material", "denim,silk"], "needs --material-map"),
         (vec!["--buttons", s(&far)], "button pair 0"),
+        (vec!["--strain-limit=-1"], "--strain-limit -1"),
     ] {
         let out = dir.join("bad.pc2");
         let o = anim(&extra, &out);

@@ -47,6 +47,7 @@ pub mod potential;
 pub mod sequence;
 pub mod solver;
 pub mod sparse;
+pub mod strain_limit;
 pub mod stretch;
 pub mod swept;
 
@@ -59,7 +60,10 @@ pub use body::{check_garment_gap, Penetration, PosedBody, MAX_GARMENT_GAP};
 pub use buttons::Buttons;
 pub use cloth::{ClothModel, StepContacts, StepInputs};
 pub use collision::CubicCollision;
-pub use contact::{BodyContact, BodyProximity, Clearance, Plane, Proximity, Sphere, VertexContact};
+pub use contact::{
+    project_contacts, BodyContact, BodyProximity, Clearance, Plane, Proximity, Sphere,
+    VertexContact,
+};
 pub use elastic_skin::{ConeVolume, ElasticSkin, ElasticSkinParams, ElasticSkinReport};
 pub use energy::{gradient_of, hessian_of, hessian_pattern_of, Energy, HessianKind};
 pub use error::SimError;
@@ -80,5 +84,6 @@ pub use sequence::{
 };
 pub use solver::{ClothSimulator, NewtonOptions, PreconditionerKind, SimOptions};
 pub use sparse::{BlockCsr, ElementGather, GatherCache, PatternBuilder};
+pub use strain_limit::{StrainLimit, StrainLimited};
 pub use stretch::{Stretch, StretchParams};
 pub use swept::SweptBody;

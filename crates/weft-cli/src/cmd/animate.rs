@@ -54,7 +54,9 @@ pub struct AnimateArgs {
     /// Post-process: move predicted vertices that are inside the posed body, or within
     /// this many millimetres of it, to its surface plus that distance. The network has
     /// no hard contact constraint (legs can pass through a predicted skirt); 4 is the
-    /// margin garments are fitted with.
+    /// margin garments are fitted with. A HOOD rollout does it after every step
+    /// instead, against the collision term's contact planes, and goes on from the
+    /// garment outside the body.
     #[arg(long, value_name = "MM")]
     push_out: Option<f64>,
     /// The β the garment was made for (comma-separated), when that is not the --betas
@@ -119,11 +121,12 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let loading = || format!("loading run {}", args.run.display());
     let (header, _) = weft_models::run::read_run_config(&args.run).with_context(loading)?;
     let started = Instant::now();
-    let (deformer, mut frames, stopped): (Box<dyn Deformer + Send>, _, _) =
+    let (deformer, mut frames, stopped, corrections): (Box<dyn Deformer + Send>, _, _, _) =
         if header.model == ModelKind::Hood {
             let mut hood = HoodPredictor::load(&args.run).with_context(loading)?;
             args.hood
                 .configure(&mut hood, args.material.as_deref(), garment.vertex_count())?;
+            hood.options.contact_margin = args.push_out.map(|mm| mm / 1000.0);
             let clip = Clip {
                 betas: &betas,
                 poses: motion.poses(),
@@ -136,7 +139,10 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
                 .iter()
                 .map(|f| f.iter().map(|p| p.map(|x| x as f32)).collect())
                 .collect();
-            (Box::new(hood), frames, rollout.stopped)
+            let corrections =
+                hood.options.strain_limit.is_some() || hood.options.contact_margin.is_some();
+            let corrections = corrections.then_some(rollout.corrections);
+            (Box::new(hood), frames, rollout.stopped, corrections)
         } else {
             if let Some(flag) = args.hood.given() {
                 bail!(
@@ -154,7 +160,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             }
             let deformer = load_deformer(&args.run).with_context(loading)?;
             let frames = animate(deformer.as_ref(), &garment, &body, &betas, &motion)?;
-            (deformer, frames, None)
+            (deformer, frames, None, None)
         };
     let seconds = started.elapsed().as_secs_f64();
     // A diverged rollout keeps its finished frames: they are written, then reported.
@@ -171,8 +177,10 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let scene_body = format.holds_scene() && !args.skinned;
     let posed = PosedSequence::new(&body, &betas, motion.poses(), motion.trans())?;
     let pushed = match args.push_out {
-        Some(mm) => Some(push_out_of_body(&mut frames, &posed, mm / 1000.0)?),
-        None => None,
+        Some(mm) if header.model != ModelKind::Hood => {
+            Some(push_out_of_body(&mut frames, &posed, mm / 1000.0)?)
+        }
+        _ => None,
     };
     let check = check_animation(&garment, &frames, &posed)?;
     let bodies = scene_body.then(|| {
@@ -224,6 +232,10 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             "model": deformer.name(),
             "inference_seconds": seconds,
             "pushed_out_vertices": pushed,
+            "rollout_corrections": corrections.map(|c| json!({
+                "edges_limited": c.edges_limited,
+                "vertices_projected": c.vertices_projected,
+            })),
             "check": check,
         }))?)?;
     } else {
@@ -237,6 +249,12 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             seconds,
             frames.len() as f64 / seconds.max(1e-9)
         ))?;
+        if let Some(c) = corrections {
+            emit(&format!(
+                "during the rollout: {} edges shortened to the strain limit, {} vertex positions moved onto contact planes (over all steps)",
+                c.edges_limited, c.vertices_projected
+            ))?;
+        }
         if let Some(n) = pushed {
             emit(&format!(
                 "pushed {n} vertex positions (over all frames) out of the body"

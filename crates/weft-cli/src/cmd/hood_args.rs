@@ -1,6 +1,6 @@
 //! `weft animate`'s choices for a HOOD run, which picks them at run time: what the
 //! garment is made of (one material, or a per-vertex map over a list of them), button
-//! vertex pairs, and the frame at which they come undone.
+//! vertex pairs, the frame at which they come undone, and run-time strain limiting.
 
 use std::path::PathBuf;
 
@@ -25,6 +25,11 @@ pub struct HoodArgs {
     /// HOOD: the buttons come undone at this frame (their edges leave the graph).
     #[arg(long, value_name = "FRAME", requires = "buttons")]
     unbutton_at: Option<usize>,
+    /// HOOD: after every step, shorten edges stretched more than this many percent
+    /// beyond their rest length (strain limiting, Provot 1995), and go on from there.
+    /// Off by default: the network's steps as they are.
+    #[arg(long, value_name = "PERCENT")]
+    strain_limit: Option<f64>,
 }
 
 impl HoodArgs {
@@ -34,6 +39,8 @@ impl HoodArgs {
             Some("--material-map")
         } else if self.buttons.is_some() {
             Some("--buttons")
+        } else if self.strain_limit.is_some() {
+            Some("--strain-limit")
         } else {
             None
         }
@@ -68,6 +75,12 @@ impl HoodArgs {
             hood.buttons = buttons(path)?;
         }
         hood.options.unbutton_at = self.unbutton_at;
+        if let Some(percent) = self.strain_limit {
+            if !(percent.is_finite() && percent >= 0.0) {
+                bail!("--strain-limit {percent}: expected a percentage >= 0");
+            }
+            hood.options.strain_limit = Some(percent / 100.0);
+        }
         Ok(())
     }
 }

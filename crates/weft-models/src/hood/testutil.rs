@@ -20,3 +20,13 @@ pub(crate) fn body_and_skirt(vertices: usize) -> (BodyModel, TriMesh) {
 pub(crate) fn still(frames: usize) -> (Vec<Pose>, Vec<[f32; 3]>) {
     (vec![[[0.0f32; 3]; 24]; frames], vec![[0.0f32; 3]; frames])
 }
+
+/// `poses` and `trans` on the mean body shape at 30 fps.
+pub(crate) fn clip<'a>(poses: &'a [Pose], trans: &'a [[f32; 3]]) -> crate::deformer::Clip<'a> {
+    crate::deformer::Clip {
+        betas: &[],
+        poses,
+        trans,
+        fps: 30.0,
+    }
+}
