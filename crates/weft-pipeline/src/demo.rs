@@ -244,7 +244,13 @@ pub fn run_demo(
         ..EvalOptions::default()
     };
     let mut line = |s: &str| log(&format!("      {s}"));
-    let (evaluation, eval_html) = evaluate_run(&run_dir, &data_dir, &eval_opts, &mut line)?;
+    let (evaluation, eval_html) = evaluate_run(
+        &run_dir,
+        &data_dir,
+        &eval_opts,
+        &weft_models::hood::RolloutOptions::default(),
+        &mut line,
+    )?;
     let r = &evaluation.report;
     let model_mm = r.model().map_or(f64::NAN, |m| m.overall.e_verts_mm.mean);
     let lbs_mm = r

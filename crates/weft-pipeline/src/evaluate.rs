@@ -7,6 +7,7 @@ use std::path::Path;
 use weft_data::Dataset;
 use weft_eval::evaluate::{evaluate, write_report, EvalOptions, Evaluation};
 use weft_models::garfitnet::GarFitPredictor;
+use weft_models::hood::{HoodPredictor, RolloutOptions};
 use weft_models::run::read_run_config;
 use weft_models::{load_deformer, Deformer, ModelKind, SkinningBaseline};
 
@@ -14,23 +15,31 @@ use crate::error::{stage, PipelineError};
 
 /// Evaluates the run in `run` and the baselines on `data`, writes `RUN/report/`
 /// (eval.json, eval.md, eval.html and pictures) and returns the evaluation and the
-/// report's HTML path. `progress` gets one line per sequence.
+/// report's HTML path. `progress` gets one line per sequence. A HOOD run rolls out with
+/// `hood` (its run-time corrections); other kinds ignore it.
 pub fn evaluate_run(
     run: &Path,
     data: &Path,
     opts: &EvalOptions,
+    hood: &RolloutOptions,
     progress: &mut dyn FnMut(&str),
 ) -> Result<(Evaluation, std::path::PathBuf), PipelineError> {
     let loading = || format!("loading run {}", run.display());
     // GarFitNet is scored twice: its coarse regressor alone and the refined output
     // (Tables 4.1–4.2).
-    let garfit = match read_run_config(run).map_err(stage(&loading()))?.0.model {
+    let kind = read_run_config(run).map_err(stage(&loading()))?.0.model;
+    let garfit = match kind {
         ModelKind::GarFitNet => Some(GarFitPredictor::load(run).map_err(stage(&loading()))?),
         _ => None,
     };
-    let model = match &garfit {
-        Some(_) => None,
-        None => Some(load_deformer(run).map_err(stage(&loading()))?),
+    let model: Option<Box<dyn Deformer + Send>> = match kind {
+        ModelKind::GarFitNet => None,
+        ModelKind::Hood => {
+            let mut h = HoodPredictor::load(run).map_err(stage(&loading()))?;
+            h.options = *hood;
+            Some(Box::new(h))
+        }
+        _ => Some(load_deformer(run).map_err(stage(&loading()))?),
     };
     let dataset =
         Dataset::open(data).map_err(stage(&format!("opening dataset {}", data.display())))?;

@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 use weft_data::Split;
 use weft_eval::evaluate::EvalOptions;
 use weft_eval::report::{markdown_table, write_text, Comparison, EvalReport};
+use weft_models::hood::RolloutOptions;
+use weft_models::run::read_run_config;
 use weft_render::Report;
 
 use super::emit;
@@ -48,6 +50,15 @@ pub struct EvalArgs {
     /// Print the report (or the comparison) as JSON on stdout.
     #[arg(long)]
     json: bool,
+    /// HOOD runs: shorten edges stretched more than this many percent after every step
+    /// of the rollout (`weft animate --strain-limit`). The report (RUN/report/) is then
+    /// of the corrected rollouts, and the method is named with the corrections.
+    #[arg(long, value_name = "PERCENT")]
+    strain_limit: Option<f64>,
+    /// HOOD runs: after every step, move vertices inside the body or nearer than this
+    /// many millimetres onto its surface at that distance (`weft animate --push-out`).
+    #[arg(long, value_name = "MM")]
+    push_out: Option<f64>,
     /// Character datasets only: move the root of every pose by this (x,y,z, metres), the
     /// translation test of seed 001 Fig. 3.23.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
@@ -63,6 +74,29 @@ fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([x, y, z]),
         _ => Err(format!("{s:?}: expected three finite numbers x,y,z")),
     }
+}
+
+/// The run-time corrections of `--strain-limit` and `--push-out`, refused unless one of
+/// the runs is a HOOD run (the only kind that takes them).
+fn hood_options(args: &EvalArgs) -> Result<RolloutOptions> {
+    let checked = |flag: &str, value: Option<f64>, unit: f64| -> Result<Option<f64>> {
+        let Some(v) = value else { return Ok(None) };
+        if !(v.is_finite() && v >= 0.0) {
+            bail!("{flag} {v}: expected a number >= 0");
+        }
+        let hood = args.runs.iter().any(|r| {
+            read_run_config(r).is_ok_and(|(h, _)| h.model == weft_models::ModelKind::Hood)
+        });
+        if !hood {
+            bail!("{flag} applies to hood runs; none of the runs given is one");
+        }
+        Ok(Some(v * unit))
+    };
+    Ok(RolloutOptions {
+        strain_limit: checked("--strain-limit", args.strain_limit, 0.01)?,
+        contact_margin: checked("--push-out", args.push_out, 0.001)?,
+        ..RolloutOptions::default()
+    })
 }
 
 fn parse_split(s: &str) -> Result<Split, String> {
@@ -86,12 +120,14 @@ pub fn command_line() -> String {
         .join(" ")
 }
 
-/// Evaluates `run` (whatever model kind trained it) and the LBS and DQS baselines on
-/// `data`, writes RUN/report/ and returns the report.
+/// Evaluates `run` (whatever model kind trained it; a HOOD run with `hood`'s run-time
+/// corrections) and the LBS and DQS baselines on `data`, writes RUN/report/ and returns
+/// the report.
 pub fn evaluate_run(
     run: &Path,
     data: &Path,
     opts: &EvalOptions,
+    hood: &RolloutOptions,
     quiet: bool,
 ) -> Result<EvalReport> {
     // The heading is printed with the first progress line, so input that fails while
@@ -110,7 +146,7 @@ pub fn evaluate_run(
             eprintln!("  {line}");
         }
     };
-    let (eval, html) = weft_pipeline::evaluate::evaluate_run(run, data, opts, &mut progress)?;
+    let (eval, html) = weft_pipeline::evaluate::evaluate_run(run, data, opts, hood, &mut progress)?;
     if let Some(h) = heading {
         eprintln!("{h}");
     }
@@ -144,6 +180,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     {
         return run_characters(args, data);
     }
+    let hood = hood_options(args)?;
     let opts = EvalOptions {
         split: args.split,
         max_sequences: args.max_sequences.map(usize::from),
@@ -153,7 +190,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         ..EvalOptions::default()
     };
     if !args.compare {
-        let report = evaluate_run(&args.runs[0], data, &opts, args.json)?;
+        let report = evaluate_run(&args.runs[0], data, &opts, &hood, args.json)?;
         if args.json {
             emit(&serde_json::to_string_pretty(&report)?)?;
         } else {
@@ -164,7 +201,8 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let mut reports = Vec::new();
     for run in &args.runs {
         let cached = run.join("report").join("eval.json");
-        let reused = if args.reuse && cached.is_file() {
+        // A cached report does not say which corrections it was made with.
+        let reused = if args.reuse && hood == RolloutOptions::default() && cached.is_file() {
             let r = EvalReport::read(&cached)?;
             (r.data == data.display().to_string() && r.split == args.split.name()).then_some(r)
         } else {
@@ -183,7 +221,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                     data.display(),
                     args.split
                 );
-                evaluate_run(run, data, &o, args.json)?
+                evaluate_run(run, data, &o, &hood, args.json)?
             }
         };
         reports.push(report);

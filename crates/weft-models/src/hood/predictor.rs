@@ -131,8 +131,23 @@ impl HoodPredictor {
 }
 
 impl Deformer for HoodPredictor {
+    /// "HOOD", with the run-time corrections when they are on (they change the frames,
+    /// so a table must not mistake them for the network's own).
     fn name(&self) -> String {
-        "HOOD".into()
+        let o = &self.options;
+        // The flags' own units, rounded so that 0.07 reads 7, not 7.000000000000001.
+        let shown = |x: f64| (x * 1e6).round() / 1e6;
+        let mut on = Vec::new();
+        if let Some(limit) = o.strain_limit {
+            on.push(format!("strain limit {} %", shown(100.0 * limit)));
+        }
+        if let Some(margin) = o.contact_margin {
+            on.push(format!("push-out {} mm", shown(1000.0 * margin)));
+        }
+        match on.is_empty() {
+            true => "HOOD".into(),
+            false => format!("HOOD ({})", on.join(", ")),
+        }
     }
 
     fn kind(&self) -> Option<ModelKind> {
@@ -263,5 +278,14 @@ mod tests {
             ..clip
         };
         assert!(p.time(&skirt, &body, &one, &[1], 3).is_err());
+    }
+
+    #[test]
+    fn the_name_says_which_corrections_are_on() {
+        let mut p = predictor();
+        assert_eq!(p.name(), "HOOD");
+        p.options.strain_limit = Some(7.0 / 100.0);
+        p.options.contact_margin = Some(2.5 / 1000.0);
+        assert_eq!(p.name(), "HOOD (strain limit 7 %, push-out 2.5 mm)");
     }
 }
