@@ -124,21 +124,30 @@ impl FitBody {
 
 /// Moves every point closer to `surface` than `margin` (or inside it) to the closest
 /// surface point plus `margin` outwards, and returns how many points moved. Four passes:
-/// a moved point can land near another part of the body (armpit, crotch).
+/// a moved point can land near another part of the body (armpit, crotch). A pass after
+/// the first queries only the points the one before moved: the others would be found
+/// where they were, at least `margin` out.
 pub fn push_out(
     surface: &BodySurface,
     points: &mut [[f64; 3]],
     margin: f64,
 ) -> Result<usize, GarmentError> {
     let mut moved = vec![false; points.len()];
+    let mut active: Vec<usize> = (0..points.len()).collect();
     for _ in 0..4 {
+        if active.is_empty() {
+            break;
+        }
+        let query: Vec<[f64; 3]> = active.iter().map(|&i| points[i]).collect();
         let closest = surface
-            .closest_points(points)
+            .closest_points(&query)
             .map_err(|e| GarmentError::Measurements(format!("closest points: {e}")))?;
-        for ((p, c), m) in points.iter_mut().zip(&closest).zip(&mut moved) {
+        let mut next = Vec::new();
+        for (&i, c) in active.iter().zip(&closest) {
             if c.signed_distance >= margin {
                 continue;
             }
+            let p = &mut points[i];
             let offset = sub(*p, c.point);
             let d = norm(offset);
             let out = if d > 1e-9 {
@@ -147,8 +156,10 @@ pub fn push_out(
                 surface.face_normals()[c.triangle as usize]
             };
             *p = add(c.point, scale(out, margin));
-            *m = true;
+            moved[i] = true;
+            next.push(i);
         }
+        active = next;
     }
     Ok(moved.iter().filter(|&&m| m).count())
 }
