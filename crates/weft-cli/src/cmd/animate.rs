@@ -251,7 +251,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         ))?;
         if let Some(c) = corrections {
             emit(&format!(
-                "during the rollout: {} edges shortened to the strain limit, {} vertex positions moved onto contact planes (over all steps)",
+                "during the rollout: {} edges shortened to the strain limit, {} vertex positions moved onto contact planes or out of the body (over all steps)",
                 c.edges_limited, c.vertices_projected
             ))?;
         }
