@@ -28,7 +28,8 @@ pub struct StrainLimit {
 pub struct StrainLimited {
     /// Edges beyond the limit before the first sweep.
     pub edges_over: usize,
-    /// Sweeps run (fewer than asked when an earlier one left no edge over the limit).
+    /// Sweeps that shortened an edge (the sweep after the last of them found none over
+    /// the limit and stopped the loop, unless the sweeps asked for ran out first).
     pub sweeps: usize,
     /// The largest `l / l₀ − 1` left after the last sweep.
     pub strain_max: f64,
