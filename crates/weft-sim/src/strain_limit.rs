@@ -26,7 +26,7 @@ pub struct StrainLimit {
 /// What one [`StrainLimit::apply`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StrainLimited {
-    /// Edges beyond the limit before the first sweep.
+    /// Edges the first sweep found beyond the limit (each as it reached it).
     pub edges_over: usize,
     /// Sweeps that shortened an edge (the sweep after the last of them found none over
     /// the limit and stopped the loop, unless the sweeps asked for ran out first).
