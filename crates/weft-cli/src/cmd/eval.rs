@@ -221,6 +221,15 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                     data.display(),
                     args.split
                 );
+                // The corrections change a HOOD run's frames: the line must repeat them.
+                for (flag, value) in [
+                    ("--strain-limit", args.strain_limit),
+                    ("--push-out", args.push_out),
+                ] {
+                    if let Some(v) = value {
+                        o.command += &format!(" {flag} {v}");
+                    }
+                }
                 evaluate_run(run, data, &o, &hood, args.json)?
             }
         };
