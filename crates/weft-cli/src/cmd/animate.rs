@@ -92,11 +92,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             format.name()
         );
     }
-    if let Some(mm) = args.push_out {
-        if !(mm.is_finite() && mm >= 0.0) {
-            anyhow::bail!("--push-out {mm}: expected a distance in millimetres >= 0");
-        }
-    }
+    let push_out = args.push_out.map(super::hood_args::push_out).transpose()?;
     // The options and inputs first (cheap, and named by their flags), then the run.
     let (body, _) = args.body.load()?;
     let betas64 = args.body.betas(&body)?;
@@ -126,7 +122,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             let mut hood = HoodPredictor::load(&args.run).with_context(loading)?;
             args.hood
                 .configure(&mut hood, args.material.as_deref(), garment.vertex_count())?;
-            hood.options.contact_margin = args.push_out.map(|mm| mm / 1000.0);
+            hood.options.contact_margin = push_out;
             let clip = Clip {
                 betas: &betas,
                 poses: motion.poses(),
@@ -176,9 +172,9 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     // The body goes into a morph-target scene here; a skinned one poses it itself.
     let scene_body = format.holds_scene() && !args.skinned;
     let posed = PosedSequence::new(&body, &betas, motion.poses(), motion.trans())?;
-    let pushed = match args.push_out {
-        Some(mm) if header.model != ModelKind::Hood => {
-            Some(push_out_of_body(&mut frames, &posed, mm / 1000.0)?)
+    let pushed = match push_out {
+        Some(margin) if header.model != ModelKind::Hood => {
+            Some(push_out_of_body(&mut frames, &posed, margin)?)
         }
         _ => None,
     };

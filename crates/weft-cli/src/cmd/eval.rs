@@ -79,22 +79,22 @@ fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
 /// The run-time corrections of `--strain-limit` and `--push-out`, refused unless one of
 /// the runs is a HOOD run (the only kind that takes them).
 fn hood_options(args: &EvalArgs) -> Result<RolloutOptions> {
-    let checked = |flag: &str, value: Option<f64>, unit: f64| -> Result<Option<f64>> {
-        let Some(v) = value else { return Ok(None) };
-        if !(v.is_finite() && v >= 0.0) {
-            bail!("{flag} {v}: expected a number >= 0");
-        }
+    use super::hood_args::{push_out, strain_limit};
+    let given = [
+        ("--strain-limit", args.strain_limit),
+        ("--push-out", args.push_out),
+    ];
+    if let Some((flag, _)) = given.iter().find(|(_, v)| v.is_some()) {
         let hood = args.runs.iter().any(|r| {
             read_run_config(r).is_ok_and(|(h, _)| h.model == weft_models::ModelKind::Hood)
         });
         if !hood {
             bail!("{flag} applies to hood runs; none of the runs given is one");
         }
-        Ok(Some(v * unit))
-    };
+    }
     Ok(RolloutOptions {
-        strain_limit: checked("--strain-limit", args.strain_limit, 0.01)?,
-        contact_margin: checked("--push-out", args.push_out, 0.001)?,
+        strain_limit: args.strain_limit.map(strain_limit).transpose()?,
+        contact_margin: args.push_out.map(push_out).transpose()?,
         ..RolloutOptions::default()
     })
 }

@@ -75,14 +75,25 @@ impl HoodArgs {
             hood.buttons = buttons(path)?;
         }
         hood.options.unbutton_at = self.unbutton_at;
-        if let Some(percent) = self.strain_limit {
-            if !(percent.is_finite() && percent >= 0.0) {
-                bail!("--strain-limit {percent}: expected a percentage >= 0");
-            }
-            hood.options.strain_limit = Some(percent / 100.0);
-        }
+        hood.options.strain_limit = self.strain_limit.map(strain_limit).transpose()?;
         Ok(())
     }
+}
+
+/// `--strain-limit PERCENT` (`weft animate`, `weft eval`) as a fraction.
+pub(super) fn strain_limit(percent: f64) -> Result<f64> {
+    if !(percent.is_finite() && percent >= 0.0) {
+        bail!("--strain-limit {percent}: expected a percentage >= 0");
+    }
+    Ok(percent / 100.0)
+}
+
+/// `--push-out MM` (`weft animate` for every model, `weft eval` for HOOD) in metres.
+pub(super) fn push_out(mm: f64) -> Result<f64> {
+    if !(mm.is_finite() && mm >= 0.0) {
+        bail!("--push-out {mm}: expected a distance in millimetres >= 0");
+    }
+    Ok(mm / 1000.0)
 }
 
 /// The per-vertex material indices in `path`: `vertices` integers below `materials`.

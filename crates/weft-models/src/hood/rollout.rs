@@ -324,6 +324,13 @@ pub fn roll_out(
             .map_err(|e| ModelError::Garment(format!("the strain limit: {e}")))?,
         None => vec![None; scenes.len()],
     };
+    // Scene k's step from frame t, for its graph and for its corrections alike.
+    let step_at = |k: usize, t: usize| StepAt {
+        t,
+        settle: false,
+        dt: scenes[k].dt,
+        buttoned: buttoned(t + 1),
+    };
     let longest = scenes.iter().map(|s| s.frames()).max().unwrap_or(0);
     for t in 0..longest.saturating_sub(1) {
         let active: Vec<usize> = (0..scenes.len())
@@ -337,13 +344,7 @@ pub fn roll_out(
             let frames = &out[k].frames;
             let cur = &frames[t];
             let prev = if t == 0 { &before[k] } else { &frames[t - 1] };
-            let at = StepAt {
-                t,
-                settle: false,
-                dt: scenes[k].dt,
-                buttoned: buttoned(t + 1),
-            };
-            steps.push(scenes[k].step(StateRef { prev, cur }, at, config)?);
+            steps.push(scenes[k].step(StateRef { prev, cur }, step_at(k, t), config)?);
         }
         let pairs: Vec<_> = steps.iter().map(|(g, a)| (g, a)).collect();
         let next = step_batch(model, stats, &pairs, device)?;
@@ -351,18 +352,12 @@ pub fn roll_out(
             match diverged(&out[k].frames[t], &x, scenes[k].dt, options.max_speed) {
                 Some(why) => out[k].stopped = Some((t + 1, why)),
                 None => {
-                    let at = StepAt {
-                        t,
-                        settle: false,
-                        dt: scenes[k].dt,
-                        buttoned: buttoned(t + 1),
-                    };
                     let done = correct(
                         scenes[k],
                         limiters[k].as_ref(),
                         options,
                         &out[k].frames[t],
-                        at,
+                        step_at(k, t),
                         &mut x,
                     )?;
                     out[k].corrections.edges_limited += done.edges_limited;
