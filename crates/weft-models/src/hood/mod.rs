@@ -28,6 +28,9 @@ pub use config::HoodConfig;
 pub use garment::HoodGarment;
 pub use model::{Hood, HoodInput};
 pub use predictor::HoodPredictor;
-pub use rollout::{roll_out, Advance, Corrections, Rollout, RolloutOptions, STRAIN_LIMIT_SWEEPS};
+pub use rollout::{
+    roll_out, Advance, Corrections, Rollout, RolloutOptions, CONTACT_ROUNDS, ROUND_SWEEPS,
+    STRAIN_LIMIT_SWEEPS,
+};
 pub use scene::{Materials, Scene, State, StateRef, StepAt};
 pub use stats::{HoodStats, HoodStatsFit, STATS_FILE};
