@@ -256,13 +256,12 @@ fn correct(
         // What no plane reached (a vertex farther than the contact radius at t that the
         // step or the strain limit moved into the body): the closest surface point at
         // t + 1. Pinned vertices keep their targets.
-        let surface = weft_body::query::BodySurface::new(&scene.body[at.t + 1], &scene.faces)
-            .map_err(|e| ModelError::Body(format!("the body at frame {}: {e}", at.t + 1)))?;
+        let end = scene.posed_body(at)?;
         let free: Vec<usize> = (0..next.len())
             .filter(|&i| !scene.garment.pinned[i])
             .collect();
         let mut points: Vec<[f64; 3]> = free.iter().map(|&i| next[i]).collect();
-        done.vertices_projected += push_out(&surface, &mut points, margin).map_err(|e| {
+        done.vertices_projected += push_out(end.surface(), &mut points, margin).map_err(|e| {
             ModelError::Garment(format!("pushing frame {} out of the body: {e}", at.t + 1))
         })?;
         for (&i, p) in free.iter().zip(points) {
