@@ -4,13 +4,15 @@
 # pairs, `weft simulate --buttons` holds them (top row) or lets them go at a frame
 # (`--unbutton-at`, bottom row); frames 10, 19, 25, 40 and 59 over the posed body.
 # With RUN set, a trained HOOD run rolls the top out instead (`weft animate RUN
-# --buttons`, the same pairs and frame).
+# --buttons`, the same pairs and frame), with OPTIONS as extra `weft animate` flags
+# (e.g. '--strain-limit 5 --push-out 2').
 #
 #   tools/tables/unbutton_pictures.sh OUT.png
 #   RUN=R KIND=tshirt VERTICES=1000 MATERIAL=hood tools/tables/unbutton_pictures.sh OUT.png
 #
 # Environment: WEFT (default `weft`), RUN (none: simulate), KIND (longsleeve), VERTICES
-# (2000), MOTION (raise-arms), SEED (2), MATERIAL (cotton), BUTTONS (6), UNBUTTON_AT (20).
+# (2000), MOTION (raise-arms), SEED (2), MATERIAL (cotton), BUTTONS (6), UNBUTTON_AT (20),
+# OPTIONS (none; with RUN only).
 # Needs python3 with Pillow (tools/tables/contact_sheet.py).
 set -euo pipefail
 
@@ -18,6 +20,7 @@ out=$1
 weft=${WEFT:-weft}
 kind=${KIND:-longsleeve} vertices=${VERTICES:-2000} motion=${MOTION:-raise-arms}
 seed=${SEED:-2} material=${MATERIAL:-cotton} buttons=${BUTTONS:-6} at=${UNBUTTON_AT:-20}
+read -ra options <<<"${OPTIONS:-}"
 frames=(10 19 25 40 59)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -30,7 +33,8 @@ roll() {
     shift
     if [[ -n "${RUN:-}" ]]; then
         "$weft" animate "$RUN" --garment "$tmp/jacket.obj" --motion "$tmp/motion.npz" \
-            --material "$material" --buttons "$tmp/pairs.json" "$@" --format obj --out "$dir/obj"
+            --material "$material" --buttons "$tmp/pairs.json" "${options[@]}" "$@" \
+            --format obj --out "$dir/obj"
     else
         "$weft" simulate --garment "$tmp/jacket.obj" --motion "$tmp/motion.npz" \
             --material "$material" --buttons "$tmp/pairs.json" "$@" --obj --out "$dir"
