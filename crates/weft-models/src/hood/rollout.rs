@@ -128,7 +128,7 @@ pub const STRAIN_LIMIT_SWEEPS: usize = 100;
 /// Rounds of strain limiting ([`ROUND_SWEEPS`] sweeps) and contact projection after
 /// the first of each, when a rollout has both. A vertex the projection moves then
 /// drags its neighbours along instead of stretching the edges to them: with one pass
-/// of each, a sleeve's edges next to a contact ended steps at up to 7 rest lengths
+/// of each, a sleeve's edges next to a contact ended steps 7 rest lengths over
 /// (docs/hood.md item 11).
 pub const CONTACT_ROUNDS: usize = 5;
 
