@@ -237,7 +237,7 @@ fn correct(
     };
     done.edges_limited = limit(next, STRAIN_LIMIT_SWEEPS)?;
     if let Some(margin) = options.contact_margin {
-        let body = scene.contact_body(at)?;
+        let (body, end) = scene.contact_and_posed_body(at)?;
         let contacts = scene
             .cloth_at(at)
             .contacts(cur, &scene.garment.pinned, Some(body.as_ref()))
@@ -256,7 +256,6 @@ fn correct(
         // What no plane reached (a vertex farther than the contact radius at t that the
         // step or the strain limit moved into the body): the closest surface point at
         // t + 1. Pinned vertices keep their targets.
-        let end = scene.posed_body(at)?;
         let free: Vec<usize> = (0..next.len())
             .filter(|&i| !scene.garment.pinned[i])
             .collect();

@@ -318,11 +318,31 @@ impl Scene {
         if !self.swept_contacts || at.settle {
             return Ok(Box::new(self.posed_body(at)?));
         }
+        Ok(Box::new(self.swept_body(at)?))
+    }
+
+    /// [`Scene::contact_body`] and [`Scene::posed_body`] from one build (a swept body
+    /// ends at the posed one): the run-time corrections need both every step.
+    pub fn contact_and_posed_body(
+        &self,
+        at: StepAt,
+    ) -> Result<(Box<dyn BodyProximity + Sync>, PosedBody), ModelError> {
+        if !self.swept_contacts || at.settle {
+            let posed = self.posed_body(at)?;
+            return Ok((Box::new(posed.clone()), posed));
+        }
+        let swept = self.swept_body(at)?;
+        let posed = swept.after().clone();
+        Ok((Box::new(swept), posed))
+    }
+
+    /// The body swept from frame `at.t` to its state at the end of step `at`.
+    fn swept_body(&self, at: StepAt) -> Result<SweptBody, ModelError> {
         let sim = |e: weft_sim::SimError| ModelError::Body(format!("the swept body: {e}"));
         let before = self.posed_body(StepAt { settle: true, ..at })?;
         let mut after = before.clone();
         after.refit(&self.body[at.t + 1]).map_err(sim)?;
-        Ok(Box::new(SweptBody::new(before, after).map_err(sim)?))
+        SweptBody::new(before, after).map_err(sim)
     }
 
     /// The step `at` from `state` as weft-sim's implicit Euler takes it (Newton on the
