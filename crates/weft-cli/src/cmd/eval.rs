@@ -76,15 +76,19 @@ fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
     }
 }
 
+/// `--strain-limit` and `--push-out` by flag, as given.
+fn correction_flags(args: &EvalArgs) -> [(&'static str, Option<f64>); 2] {
+    [
+        ("--strain-limit", args.strain_limit),
+        ("--push-out", args.push_out),
+    ]
+}
+
 /// The run-time corrections of `--strain-limit` and `--push-out`, refused unless one of
 /// the runs is a HOOD run (the only kind that takes them).
 fn hood_options(args: &EvalArgs) -> Result<RolloutOptions> {
     use super::hood_args::{push_out, strain_limit};
-    let given = [
-        ("--strain-limit", args.strain_limit),
-        ("--push-out", args.push_out),
-    ];
-    if let Some((flag, _)) = given.iter().find(|(_, v)| v.is_some()) {
+    if let Some((flag, _)) = correction_flags(args).iter().find(|(_, v)| v.is_some()) {
         let hood = args.runs.iter().any(|r| {
             read_run_config(r).is_ok_and(|(h, _)| h.model == weft_models::ModelKind::Hood)
         });
@@ -222,10 +226,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                     args.split
                 );
                 // The corrections change a HOOD run's frames: the line must repeat them.
-                for (flag, value) in [
-                    ("--strain-limit", args.strain_limit),
-                    ("--push-out", args.push_out),
-                ] {
+                for (flag, value) in correction_flags(args) {
                     if let Some(v) = value {
                         o.command += &format!(" {flag} {v}");
                     }
