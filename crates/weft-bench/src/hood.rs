@@ -1,20 +1,23 @@
 //! `weft bench hood`: one rollout step of HOOD (seed 004) on the benchmark skirt of about
 //! `vertices` vertices over the walking body, per stage, as `weft animate` runs it: the
 //! step graph (body edges by nearest body vertex, features of nodes and of every level's
-//! edges), the inputs as tensors (normalised), the network, the integration to
-//! `x_{t+1}`, and the whole step; with `batch` garments advanced in one forward pass, the
-//! rollout steps per second of the batch. The scene (posing the body, the garment's
-//! hierarchy, skinning) is timed apart: a clip pays it once.
+//! edges), the inputs (normalised), the network, the integration to `x_{t+1}`, and the
+//! whole step; with `batch` garments advanced in one forward pass, the rollout steps per
+//! second of the batch. The scene (posing the body, the garment's hierarchy, skinning) is
+//! timed apart: a clip pays it once.
 //!
-//! The network runs as burn layers on the flex CPU backend. Reference (issue 12): the
-//! public HOOD network at 4 000 vertices takes 710 ms per step with PyTorch at 2 threads.
+//! The network runs in its inference form (`InferHood`, weft-nn's `infer`), as rollouts
+//! run it; the same network's forward as burn layers on the flex CPU backend, the form
+//! training differentiates, is timed beside it. Reference (issue 12): the public HOOD
+//! network at 4 000 vertices takes 710 ms per step with PyTorch at 2 threads.
 
 use std::hint::black_box;
 
 use serde::Serialize;
 use weft_body::BodyModel;
 use weft_models::hood::features::StepGraph;
-use weft_models::hood::rollout::{next_positions, Advance};
+use weft_models::hood::rollout::{step_batch, Advance};
+use weft_models::hood::{HoodBatch, InferHood};
 use weft_models::hood::{HoodConfig, HoodInput, HoodStats, Materials, Scene, StepAt};
 use weft_models::Clip;
 use weft_motion::{generate, MotionKind, ProceduralParams};
@@ -68,10 +71,14 @@ pub struct HoodFigures {
     pub scene_ms: f64,
     /// The step graph of every garment of the batch.
     pub graph_ms: f64,
-    /// The batch's inputs as normalised tensors.
+    /// The batch's inputs, normalised.
     pub inputs_ms: f64,
-    /// The network (encoders, message passing, decoder), inputs included.
+    /// The network (encoders, message passing, decoder), inputs included, in its
+    /// inference form.
     pub network_ms: f64,
+    /// The same as burn layers (the forward that training differentiates, here without
+    /// autodiff), inputs as tensors included.
+    pub burn_network_ms: f64,
     /// Graphs, network and integration: one rollout step of the batch.
     pub step_ms: f64,
     /// Garment rollout steps per second (`batch` per step).
@@ -92,6 +99,7 @@ impl Row for HoodFigures {
             ("graph", format!("{:.1}", self.graph_ms)),
             ("inputs", format!("{:.1}", self.inputs_ms)),
             ("network", format!("{:.1}", self.network_ms)),
+            ("network (burn)", format!("{:.1}", self.burn_network_ms)),
             ("step ms", format!("{:.1}", self.step_ms)),
             ("steps/s", format!("{:.2}", self.steps_per_s)),
         ]
@@ -157,19 +165,26 @@ impl HoodBench {
             .map_err(BenchError::stage("the step graph"))?;
         let built = graphs().map_err(BenchError::stage("the step graph"))?;
         let refs: Vec<&StepGraph> = built.iter().map(|(g, _)| g).collect();
-        let advances: Vec<&Advance> = built.iter().map(|(_, a)| a).collect();
         let device = cpu();
         let stats = HoodStats::identity(cfg.levels);
         let model = cfg
             .init(&device)
             .map_err(BenchError::stage("the network"))?;
+        let infer = InferHood::from(&model);
         progress("inputs");
         let inputs_ms = try_median_ms(self.reps, || {
-            HoodInput::new(&refs, &stats, &device).map(|x| drop(black_box(x)))
+            HoodBatch::new(&refs, &stats).map(|x| drop(black_box(x)))
         })
         .map_err(BenchError::stage("the inputs"))?;
         progress("network");
         let network_ms = try_median_ms(self.reps, || {
+            let out = infer.forward(&HoodBatch::new(&refs, &stats)?)?;
+            drop(black_box(out));
+            Ok::<(), weft_models::ModelError>(())
+        })
+        .map_err(BenchError::stage("the network"))?;
+        progress("network (burn)");
+        let burn_network_ms = try_median_ms(self.reps, || {
             let out = model.forward(HoodInput::new(&refs, &stats, &device)?)?;
             drop(black_box(out.into_data()));
             Ok::<(), weft_models::ModelError>(())
@@ -178,15 +193,11 @@ impl HoodBench {
         progress("step");
         let step_ms = try_median_ms(self.reps, || {
             let built = graphs()?;
-            let refs: Vec<&StepGraph> = built.iter().map(|(g, _)| g).collect();
-            let advances: Vec<&Advance> = built.iter().map(|(_, a)| a).collect();
-            let out = model.forward(HoodInput::new(&refs, &stats, &device)?)?;
-            let x = next_positions(out, &advances, &stats, &device)?;
-            drop(black_box(x.into_data()));
+            let pairs: Vec<_> = built.iter().map(|(g, a)| (g, a)).collect();
+            drop(black_box(step_batch(&infer, &stats, &pairs, &device)?));
             Ok::<(), weft_models::ModelError>(())
         })
         .map_err(BenchError::stage("one step"))?;
-        drop(advances);
         let one = &built[0].0;
         Ok(HoodFigures {
             bench: "hood",
@@ -203,6 +214,7 @@ impl HoodBench {
             graph_ms,
             inputs_ms,
             network_ms,
+            burn_network_ms,
             step_ms,
             steps_per_s: 1e3 * self.batch as f64 / step_ms,
         })

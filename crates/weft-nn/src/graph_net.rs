@@ -67,52 +67,69 @@ struct Endpoints {
 
 impl Endpoints {
     fn new(node_count: usize, senders: &[u32], receivers: &[u32], device: &Device) -> Self {
-        let mut position = vec![u32::MAX; node_count];
-        for &v in senders.iter().chain(receivers) {
-            position[v as usize] = 0;
-        }
-        let mut nodes = Vec::new();
-        for (v, p) in position.iter_mut().enumerate() {
-            if *p == 0 {
-                *p = nodes.len() as u32;
-                nodes.push(v as u32);
-            }
-        }
-        let local =
-            |ends: &[u32]| -> Vec<u32> { ends.iter().map(|&v| position[v as usize]).collect() };
-        if nodes.len() == node_count {
-            return Endpoints {
-                nodes: None,
-                senders: index_tensor(senders, device),
-                receivers: index_tensor(receivers, device),
-            };
-        }
+        let (nodes, senders, receivers) = endpoint_positions(node_count, senders, receivers);
         Endpoints {
-            nodes: Some(index_tensor(&nodes, device)),
-            senders: index_tensor(&local(senders), device),
-            receivers: index_tensor(&local(receivers), device),
+            nodes: nodes.map(|nodes| index_tensor(&nodes, device)),
+            senders: index_tensor(&senders, device),
+            receivers: index_tensor(&receivers, device),
         }
     }
+}
+
+/// The endpoint nodes of the edges `(senders[i], receivers[i])`, ascending, and every
+/// edge's sender and receiver as positions among them; `None` and the nodes themselves
+/// when every node is an endpoint.
+pub(crate) fn endpoint_positions(
+    node_count: usize,
+    senders: &[u32],
+    receivers: &[u32],
+) -> (Option<Vec<u32>>, Vec<u32>, Vec<u32>) {
+    let mut position = vec![u32::MAX; node_count];
+    for &v in senders.iter().chain(receivers) {
+        position[v as usize] = 0;
+    }
+    let mut nodes = Vec::new();
+    for (v, p) in position.iter_mut().enumerate() {
+        if *p == 0 {
+            *p = nodes.len() as u32;
+            nodes.push(v as u32);
+        }
+    }
+    if nodes.len() == node_count {
+        return (None, senders.to_vec(), receivers.to_vec());
+    }
+    let local = |ends: &[u32]| -> Vec<u32> { ends.iter().map(|&v| position[v as usize]).collect() };
+    (Some(nodes), local(senders), local(receivers))
+}
+
+/// The senders and receivers of `[sender, receiver]` pairs; errors on an endpoint
+/// `≥ node_count`.
+pub(crate) fn split_edges(
+    node_count: usize,
+    edges: &[[u32; 2]],
+) -> crate::Result<(Vec<u32>, Vec<u32>)> {
+    let mut senders = Vec::with_capacity(edges.len());
+    let mut receivers = Vec::with_capacity(edges.len());
+    for &[s, r] in edges {
+        for v in [s, r] {
+            if v as usize >= node_count {
+                return Err(NnError::Index {
+                    what: "edge set endpoint",
+                    index: v as usize,
+                    len: node_count,
+                });
+            }
+        }
+        senders.push(s);
+        receivers.push(r);
+    }
+    Ok((senders, receivers))
 }
 
 impl EdgeSet {
     /// From `[sender, receiver]` pairs; errors on an endpoint `≥ node_count`.
     pub fn new(node_count: usize, edges: &[[u32; 2]], device: &Device) -> crate::Result<Self> {
-        let mut senders = Vec::with_capacity(edges.len());
-        let mut receivers = Vec::with_capacity(edges.len());
-        for &[s, r] in edges {
-            for v in [s, r] {
-                if v as usize >= node_count {
-                    return Err(NnError::Index {
-                        what: "edge set endpoint",
-                        index: v as usize,
-                        len: node_count,
-                    });
-                }
-            }
-            senders.push(s);
-            receivers.push(r);
-        }
+        let (senders, receivers) = split_edges(node_count, edges)?;
         Ok(EdgeSet {
             senders: index_tensor(&senders, device),
             receivers: index_tensor(&receivers, device),

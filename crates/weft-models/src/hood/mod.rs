@@ -26,7 +26,7 @@ pub(crate) mod testutil;
 
 pub use config::HoodConfig;
 pub use garment::HoodGarment;
-pub use model::{Hood, HoodInput};
+pub use model::{Hood, HoodBatch, HoodInput, InferHood};
 pub use predictor::HoodPredictor;
 pub use rollout::{
     roll_out, Advance, Corrections, Rollout, RolloutOptions, CONTACT_ROUNDS, ROUND_SWEEPS,

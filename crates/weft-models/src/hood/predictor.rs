@@ -11,7 +11,7 @@ use weft_mesh::TriMesh;
 use weft_sim::{Attachment, Material};
 
 use super::config::HoodConfig;
-use super::model::Hood;
+use super::model::InferHood;
 use super::rollout::{roll_out, Rollout, RolloutOptions};
 use super::scene::{Materials, Scene};
 use super::stats::{HoodStats, STATS_FILE};
@@ -23,8 +23,8 @@ use crate::run::{latest_checkpoint, model_config, RunLayout};
 
 /// A trained HOOD run ready to roll out on the CPU.
 pub struct HoodPredictor {
-    /// The network at the run's latest checkpoint.
-    pub model: Hood,
+    /// The network at the run's latest checkpoint, in its inference form.
+    pub model: InferHood,
     /// The run's `[model]`.
     pub config: HoodConfig,
     /// The run's normalisers.
@@ -59,7 +59,7 @@ impl HoodPredictor {
         };
         let device = weft_nn::backend::cpu();
         let checkpoint = latest_checkpoint(dir)?;
-        let model = load_record(config.init(&device)?, &checkpoint)?;
+        let model = InferHood::from(&load_record(config.init(&device)?, &checkpoint)?);
         let stats = HoodStats::read(dir)?;
         if stats.levels() != config.levels {
             return Err(run_err(format!(
@@ -239,7 +239,7 @@ mod tests {
         let config = HoodConfig::preset("cpu").unwrap();
         let device = weft_nn::backend::cpu();
         HoodPredictor {
-            model: config.init(&device).unwrap(),
+            model: InferHood::from(&config.init(&device).unwrap()),
             stats: HoodStats::identity(config.levels),
             config,
             materials: Materials::Uniform(Material::hood()),

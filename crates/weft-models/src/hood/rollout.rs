@@ -11,7 +11,7 @@ use weft_sim::{project_contacts, StrainLimit};
 use super::config::HoodConfig;
 use super::features::GarmentStep;
 use super::garment::HoodGarment;
-use super::model::{Hood, HoodInput};
+use super::model::{HoodBatch, InferHood};
 use super::scene::{Scene, StateRef, StepAt};
 use super::stats::HoodStats;
 use crate::error::ModelError;
@@ -161,14 +161,16 @@ pub struct Rollout {
 
 /// One HOOD step of several states at once (one disjoint graph): `x_{t+1}` of each.
 pub fn step_batch(
-    model: &Hood,
+    model: &InferHood,
     stats: &HoodStats,
     steps: &[(&super::features::StepGraph, &Advance)],
     device: &Device,
 ) -> Result<Vec<Vec<[f64; 3]>>, ModelError> {
     let graphs: Vec<_> = steps.iter().map(|s| s.0).collect();
     let advances: Vec<_> = steps.iter().map(|s| s.1).collect();
-    let out = model.forward(HoodInput::new(&graphs, stats, device)?)?;
+    let out = model.forward(&HoodBatch::new(&graphs, stats)?)?;
+    let rows = out.len() / 3;
+    let out = Tensor::<2>::from_data(TensorData::new(out, [rows, 3]), device);
     let x = next_positions(out, &advances, stats, device)?;
     let mut rows = host_positions(&x)?.into_iter();
     Ok(advances
@@ -283,7 +285,7 @@ fn correct(
 /// otherwise meet a garment at rest with a body moving at full speed, and a run's
 /// thighs go through the front of a skirt in the first step (docs/hood.md item 9).
 pub fn roll_out(
-    model: &Hood,
+    model: &InferHood,
     stats: &HoodStats,
     config: &HoodConfig,
     scenes: &[&Scene],
@@ -416,7 +418,7 @@ mod tests {
         let hood = Materials::Uniform(Material::hood());
         for (settle_dt, want) in [(0.0, 0.05), (1.0 / 3.0, 0.0)] {
             let config = HoodConfig::preset("cpu").unwrap().with_settle_dt(settle_dt);
-            let model = config.init(&device).unwrap();
+            let model = InferHood::from(&config.init(&device).unwrap());
             let stats = HoodStats::identity(config.levels);
             let scene =
                 Scene::new(&skirt, &body, &clip, &hood, Attachment::TopOpening, &config).unwrap();
@@ -488,7 +490,7 @@ mod tests {
         let clip = crate::hood::testutil::clip(&poses, &trans);
         let device = cpu();
         let config = HoodConfig::preset("cpu").unwrap();
-        let model = config.init(&device).unwrap();
+        let model = InferHood::from(&config.init(&device).unwrap());
         let mut stats = HoodStats::identity(config.levels);
         stats.output.mean = vec![0.0, -0.01, 0.01];
         let hood = Materials::Uniform(Material::hood());

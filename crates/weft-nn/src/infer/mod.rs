@@ -20,6 +20,7 @@
 //! (`InferMlp::from(&mlp)`, ...) and the tests hold them equal to the layers' forward.
 
 mod gat;
+mod graph_net;
 mod linear;
 pub(crate) mod math;
 mod multires;
@@ -29,6 +30,7 @@ use std::ops::Range;
 use burn::tensor::{Device, Tensor, TensorData};
 
 pub use gat::{InferDenseModule, InferGat};
+pub use graph_net::{InferEdgeSet, InferProcessor};
 pub use linear::{Epilogue, InferLinear, InferMlp};
 pub use multires::{InferGlobal, InferMultiRes};
 
@@ -152,33 +154,54 @@ impl Columns<'_> {
 /// `x w` with `w` `[x.width, n]` row-major, into a new `[rows, n]` buffer: burn flex's own
 /// GEMM (`gemm`), reading `x`'s columns through its row stride.
 fn matmul(x: Columns<'_>, w: &[f32], n: usize) -> Features {
+    let mut out = Features::zeros(x.rows(), n);
+    let parallelism = crate::flex::gemm_parallelism(x.rows(), n, x.width);
+    product(&mut out.data, x, w, n, false, parallelism);
+    out
+}
+
+/// `dst ← x w`, or `dst ← dst + x w` when `accumulate`, with `w` `[x.width, n]` and `dst`
+/// `[x.rows(), n]`, both row-major.
+fn product(
+    dst: &mut [f32],
+    x: Columns<'_>,
+    w: &[f32],
+    n: usize,
+    accumulate: bool,
+    parallelism: gemm::Parallelism,
+) {
     let (m, k) = (x.rows(), x.width);
     assert_eq!(w.len(), k * n, "weight of {k} × {n}");
-    let mut out = Features::zeros(m, n);
-    if m == 0 || n == 0 || k == 0 {
-        return out;
+    assert_eq!(dst.len(), m * n, "product of {m} × {n}");
+    if m == 0 || n == 0 {
+        return;
     }
-    let parallelism = crate::flex::gemm_parallelism(m, n, k);
-    // SAFETY: `out` holds `m × n` values at row stride `n`; `w` holds `k × n` at row
-    // stride `n` (asserted); `x` reads rows `r < m` at `start + r·stride + c` with
+    if k == 0 {
+        if !accumulate {
+            dst.fill(0.0);
+        }
+        return;
+    }
+    // SAFETY: `dst` holds `m × n` values at row stride `n` (asserted); `w` holds `k × n`
+    // at row stride `n` (asserted); `x` reads rows `r < m` at `start + r·stride + c` with
     // `c < k` and `start + k ≤ stride`, inside `x.data` (`m·stride` values). `gemm`
-    // writes only `out` and, with `read_dst = false`, does not read it.
+    // writes only `dst`, and reads it only when `accumulate`.
     unsafe {
         gemm::gemm(
             m,
             n,
             k,
-            out.data.as_mut_ptr(),
+            dst.as_mut_ptr(),
             1,
             n as isize,
-            false,
+            accumulate,
             x.data.as_ptr().add(x.start),
             1,
             x.stride as isize,
             w.as_ptr(),
             1,
             n as isize,
-            0.0,
+            if accumulate { 1.0 } else { 0.0 },
             1.0,
             false,
             false,
@@ -186,7 +209,6 @@ fn matmul(x: Columns<'_>, w: &[f32], n: usize) -> Features {
             parallelism,
         );
     }
-    out
 }
 
 /// The values of a tensor as f32, for building the inference forms.

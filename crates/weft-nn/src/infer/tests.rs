@@ -8,7 +8,8 @@ use crate::backend::{cpu, seeded};
 use crate::batch::GraphBatch;
 use crate::testutil::{host, max_diff, random_graph, tensor, Rng};
 use crate::{
-    Activation, DenseGatModuleConfig, GatBlockConfig, HeadMerge, MlpConfig, NormedGatConfig,
+    Activation, DenseGatModuleConfig, EdgeSet, GatBlockConfig, HeadMerge, MlpConfig,
+    NormedGatConfig, ProcessorConfig,
 };
 
 /// Draws every vector parameter and running statistic (γ, β, μ, σ², biases) from
@@ -181,4 +182,69 @@ fn multires_module_equals_the_layer() {
         let got = fast.forward(&f, &batch).unwrap();
         assert_close(&got, want, &format!("global {global}"));
     }
+}
+
+/// The processor's inference form equals its forward: more rows than one chunk of
+/// [`InferMlp::map_rows`], a set whose edges leave most nodes out of their endpoints (the
+/// split product's gathered rows), a set with no edges, nodes with no incoming edge, and
+/// a schedule that reads the sets in different orders; the latents of a set no step
+/// reads come back unchanged.
+#[test]
+fn processor_equals_the_layer() {
+    let device = device();
+    let (n, l) = (700, 8);
+    let processor = ProcessorConfig::new(l, 4, vec![vec![0, 1], vec![2, 0], vec![1, 2], vec![0]])
+        .init(&device)
+        .unwrap()
+        .map(&mut Statistics);
+    let mut rng = Rng::new(11);
+    let mesh: Vec<[u32; 2]> = (0..1500)
+        .map(|_| [rng.below(n) as u32, rng.below(n) as u32])
+        .collect();
+    let few: Vec<[u32; 2]> = (0..300)
+        .map(|_| [rng.below(60) as u32, 600 + rng.below(40) as u32])
+        .collect();
+    let lists: [&[[u32; 2]]; 4] = [&mesh, &few, &[], &mesh[..20]];
+    let (fast_nodes, nodes) = input(&mut rng, n, l);
+    let latents: Vec<(Features, Tensor<2>)> = lists
+        .iter()
+        .map(|list| input(&mut rng, list.len(), l))
+        .collect();
+    let sets: Vec<EdgeSet> = lists
+        .iter()
+        .map(|list| EdgeSet::new(n, list, &device).unwrap())
+        .collect();
+    let (want_nodes, want_edges) = processor
+        .forward(
+            nodes,
+            &sets,
+            latents.iter().map(|(_, t)| t.clone()).collect(),
+        )
+        .unwrap();
+
+    let fast = InferProcessor::from(&processor);
+    let fast_sets: Vec<InferEdgeSet> = lists
+        .iter()
+        .map(|list| InferEdgeSet::new(n, list).unwrap())
+        .collect();
+    let mut got_nodes = fast_nodes;
+    let mut got_edges: Vec<Features> = latents.iter().map(|(f, _)| f.clone()).collect();
+    fast.forward(&mut got_nodes, &fast_sets, &mut got_edges)
+        .unwrap();
+    assert_close(&got_nodes, want_nodes, "processor nodes");
+    for (k, (got, want)) in got_edges.iter().zip(want_edges).enumerate() {
+        assert_close(got, want, &format!("edge set {k}"));
+    }
+    assert_eq!(got_edges[3], latents[3].0, "set 3 is read by no step");
+
+    // Wrong shapes are errors, not panics.
+    let mut short = got_edges.clone();
+    short[0] = Features::zeros(3, l);
+    assert!(fast
+        .forward(&mut got_nodes, &fast_sets, &mut short)
+        .is_err());
+    assert!(fast
+        .forward(&mut got_nodes, &fast_sets[..3], &mut got_edges[..3])
+        .is_err());
+    assert!(InferEdgeSet::new(5, &[[0, 5]]).is_err());
 }

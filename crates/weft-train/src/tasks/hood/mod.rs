@@ -46,7 +46,7 @@ use weft_mesh::rng::SplitMix64;
 use weft_mesh::TriMesh;
 use weft_models::hood::rollout::{host_positions, next_positions};
 use weft_models::hood::{
-    roll_out, Advance, Hood, HoodConfig, HoodInput, HoodStats, HoodStatsFit, Materials,
+    roll_out, Advance, Hood, HoodConfig, HoodInput, HoodStats, HoodStatsFit, InferHood, Materials,
     RolloutOptions, Scene, State, StateRef, StepAt, STATS_FILE,
 };
 use weft_models::Clip;
@@ -977,7 +977,7 @@ impl TrainTask for HoodTask {
         let scenes: Vec<&Scene> = self.validation.iter().collect();
         let options = RolloutOptions::default();
         let rollouts = roll_out(
-            model,
+            &InferHood::from(model),
             &self.stats,
             &self.config,
             &scenes,
