@@ -167,14 +167,7 @@ impl InferGraphNetBlock {
         let w_edge = &mlp.first_weight()[2 * l * l..];
         let (receivers, senders) = (&set.receivers, &set.senders);
         mlp.map_rows(e, true, |rows, before, _, h| {
-            product(
-                h,
-                whole(before, l),
-                w_edge,
-                l,
-                false,
-                gemm::Parallelism::None,
-            );
+            product(h, whole(before, l), w_edge, l, gemm::Parallelism::None);
             simd(
                 #[inline(always)]
                 || {
@@ -225,14 +218,7 @@ impl InferGraphNetBlock {
                         }
                     },
                 );
-                product(
-                    h,
-                    whole(input, width),
-                    w_first,
-                    l,
-                    false,
-                    gemm::Parallelism::None,
-                );
+                product(h, whole(input, width), w_first, l, gemm::Parallelism::None);
             });
     }
 }

@@ -138,7 +138,7 @@ impl InferLinear {
 /// Layer normalisation of each row, `γ (x − μ) / √(σ² + ε) + β` with the row's mean and
 /// biased variance (burn's `layer_norm`). In f32 with sixteen partial sums, so the passes
 /// vectorise: HOOD normalises every MLP's output, about 80 M values a step at 4 000
-/// vertices, and the f64 scalar form took 50–100 ms of it.
+/// vertices.
 #[derive(Clone, Debug)]
 struct RowNorm {
     gamma: Vec<f32>,
@@ -306,7 +306,7 @@ impl InferMlp {
                             width: d,
                         };
                         let y = &mut next[..m * n];
-                        product(y, x, &layer.weight, n, false, gemm::Parallelism::None);
+                        product(y, x, &layer.weight, n, gemm::Parallelism::None);
                         layer.epilogue.apply_serial(y);
                         std::mem::swap(&mut h, &mut next);
                         d = n;

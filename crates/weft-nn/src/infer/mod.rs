@@ -156,20 +156,12 @@ impl Columns<'_> {
 fn matmul(x: Columns<'_>, w: &[f32], n: usize) -> Features {
     let mut out = Features::zeros(x.rows(), n);
     let parallelism = crate::flex::gemm_parallelism(x.rows(), n, x.width);
-    product(&mut out.data, x, w, n, false, parallelism);
+    product(&mut out.data, x, w, n, parallelism);
     out
 }
 
-/// `dst ← x w`, or `dst ← dst + x w` when `accumulate`, with `w` `[x.width, n]` and `dst`
-/// `[x.rows(), n]`, both row-major.
-fn product(
-    dst: &mut [f32],
-    x: Columns<'_>,
-    w: &[f32],
-    n: usize,
-    accumulate: bool,
-    parallelism: gemm::Parallelism,
-) {
+/// `dst ← x w` with `w` `[x.width, n]` and `dst` `[x.rows(), n]`, both row-major.
+fn product(dst: &mut [f32], x: Columns<'_>, w: &[f32], n: usize, parallelism: gemm::Parallelism) {
     let (m, k) = (x.rows(), x.width);
     assert_eq!(w.len(), k * n, "weight of {k} × {n}");
     assert_eq!(dst.len(), m * n, "product of {m} × {n}");
@@ -177,15 +169,13 @@ fn product(
         return;
     }
     if k == 0 {
-        if !accumulate {
-            dst.fill(0.0);
-        }
+        dst.fill(0.0);
         return;
     }
     // SAFETY: `dst` holds `m × n` values at row stride `n` (asserted); `w` holds `k × n`
     // at row stride `n` (asserted); `x` reads rows `r < m` at `start + r·stride + c` with
     // `c < k` and `start + k ≤ stride`, inside `x.data` (`m·stride` values). `gemm`
-    // writes only `dst`, and reads it only when `accumulate`.
+    // writes only `dst` and, with `read_dst = false`, does not read it.
     unsafe {
         gemm::gemm(
             m,
@@ -194,14 +184,14 @@ fn product(
             dst.as_mut_ptr(),
             1,
             n as isize,
-            accumulate,
+            false,
             x.data.as_ptr().add(x.start),
             1,
             x.stride as isize,
             w.as_ptr(),
             1,
             n as isize,
-            if accumulate { 1.0 } else { 0.0 },
+            0.0,
             1.0,
             false,
             false,
