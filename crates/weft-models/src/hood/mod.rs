@@ -7,7 +7,8 @@
 //! - [`features`]: one step's graph (garment and body nodes, mesh edges per level, body
 //!   edges both ways) with its input features;
 //! - [`stats`]: the four normalisers a run keeps (`hood.json`);
-//! - [`model`]: the encode–process–decode network over a batch of step graphs;
+//! - [`model`]: the encode–process–decode network over a batch of step graphs, and its
+//!   inference form for rollouts;
 //! - [`rollout`]: the output integrated to `x_{t+1}`, and autoregressive rollouts of
 //!   several scenes at once;
 //! - [`scene`]: a garment on a moving body (posed frames, skinned start, pinned targets);

@@ -2,9 +2,11 @@
 //! the body edges; the multi-level processor (weft-nn's [`Processor`]); a decoder to the
 //! garment's acceleration. Encode–process–decode as in MeshGraphNets.
 //!
-//! [`HoodInput`] turns one or several [`StepGraph`]s into tensors: several garments or
-//! sequences become one disjoint graph, so a batch advances in one forward pass (HOOD's
-//! code runs batch size 1).
+//! [`HoodBatch`] turns one or several [`StepGraph`]s into one disjoint graph's normalised
+//! inputs, so a batch of garments or sequences advances in one forward pass (HOOD's code
+//! runs batch size 1); [`HoodInput`] puts them in tensors for training. Rollouts run
+//! [`InferHood`], the same network in weft-nn's inference forms: a forward pass with no
+//! autodiff graph to keep, about twice as fast (docs/hood.md, "Speed").
 
 use burn::module::Module;
 use burn::tensor::{Device, Int, Tensor, TensorData};
@@ -42,7 +44,7 @@ pub struct HoodBatch {
     nodes: Vec<f32>,
     node_width: usize,
     /// Per edge set (the mesh levels, then the body's): its `[sender, receiver]` pairs and
-    /// their features, row-major, of the width in `set_widths`.
+    /// their features, row-major, [`set_width`] wide.
     sets: Vec<(Vec<[u32; 2]>, Vec<f32>)>,
     /// Rows of the garment nodes, in order.
     garment_rows: Vec<u32>,
