@@ -156,6 +156,10 @@ fn hood_reports_its_schedule_and_propagation_radius() {
             assert_eq!(r["schedule"], s);
         }
         assert!(number(r, "step_ms") > 0.0, "{r}");
+        // Both forms of the network: the inference form rollouts run, the burn layers
+        // training differentiates.
+        assert!(number(r, "network_ms") > 0.0, "{r}");
+        assert!(number(r, "burn_network_ms") > 0.0, "{r}");
     }
 }
 
