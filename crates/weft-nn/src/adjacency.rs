@@ -140,20 +140,8 @@ impl Adjacency {
         for i in 0..n {
             targets.extend(std::iter::repeat_n(i as u32, offsets[i + 1] - offsets[i]));
         }
-        let mut t_offsets = vec![0usize; n + 1];
-        for &j in &sources {
-            t_offsets[j as usize + 1] += 1;
-        }
-        for j in 0..n {
-            t_offsets[j + 1] += t_offsets[j];
-        }
-        let mut fill = t_offsets.clone();
-        let mut t_entries = vec![0u32; sources.len()];
         // Entries are visited in ascending order, so each transpose row is ascending.
-        for (e, &j) in sources.iter().enumerate() {
-            t_entries[fill[j as usize]] = e as u32;
-            fill[j as usize] += 1;
-        }
+        let (t_offsets, t_entries) = group_by_key(n, &sources);
         Adjacency {
             n,
             offsets,
@@ -216,6 +204,25 @@ impl Adjacency {
     pub fn into_shared(self) -> Arc<Self> {
         Arc::new(self)
     }
+}
+
+/// The positions of `keys` (each `< n`) grouped by key, by counting: key `k`'s positions
+/// are `order[offsets[k]..offsets[k + 1]]`, ascending.
+pub(crate) fn group_by_key(n: usize, keys: &[u32]) -> (Vec<usize>, Vec<u32>) {
+    let mut offsets = vec![0usize; n + 1];
+    for &k in keys {
+        offsets[k as usize + 1] += 1;
+    }
+    for k in 0..n {
+        offsets[k + 1] += offsets[k];
+    }
+    let mut next = offsets.clone();
+    let mut order = vec![0u32; keys.len()];
+    for (i, &k) in keys.iter().enumerate() {
+        order[next[k as usize]] = i as u32;
+        next[k as usize] += 1;
+    }
+    (offsets, order)
 }
 
 /// A 1-D integer tensor of indices.

@@ -346,6 +346,16 @@ fn message(mlp: &Mlp, nodes: &Tensor<2>, set: &EdgeSet, e: Tensor<2>) -> Tensor<
     mlp.after_first_linear(first_layer)
 }
 
+/// Errors unless a processor over `edge_sets` sets got that many sets and latents.
+pub(crate) fn check_sets(edge_sets: usize, sets: usize, latents: usize) -> crate::Result<()> {
+    if sets != edge_sets || latents != edge_sets {
+        return Err(NnError::Config(format!(
+            "a processor over {edge_sets} edge sets got {sets} edge sets and {latents} edge latents"
+        )));
+    }
+    Ok(())
+}
+
 /// Configuration of a [`Processor`].
 #[derive(Config, Debug)]
 pub struct ProcessorConfig {
@@ -448,14 +458,7 @@ impl Processor {
         sets: &[EdgeSet],
         edges: Vec<Tensor<2>>,
     ) -> crate::Result<(Tensor<2>, Vec<Tensor<2>>)> {
-        if sets.len() != self.edge_sets || edges.len() != self.edge_sets {
-            return Err(NnError::Config(format!(
-                "a processor over {} edge sets got {} edge sets and {} edge latents",
-                self.edge_sets,
-                sets.len(),
-                edges.len()
-            )));
-        }
+        check_sets(self.edge_sets, sets.len(), edges.len())?;
         let mut nodes = nodes;
         let mut edges = edges;
         for (block, step) in self.blocks.iter().zip(&self.schedule) {

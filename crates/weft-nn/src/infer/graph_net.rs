@@ -17,8 +17,9 @@
 //! normalisation and residual (docs/hood.md, "Speed").
 
 use super::{matmul, product, Columns, Features, InferMlp};
+use crate::adjacency::group_by_key;
 use crate::error::{check_shape, NnError};
-use crate::graph_net::{endpoint_positions, split_edges, GraphNetBlock, Processor};
+use crate::graph_net::{check_sets, endpoint_positions, split_edges, GraphNetBlock, Processor};
 use crate::real::simd;
 
 /// An [`crate::EdgeSet`] on the host: the edges' endpoints for the messages and each
@@ -32,7 +33,7 @@ pub struct InferEdgeSet {
     senders: Vec<u32>,
     receivers: Vec<u32>,
     /// Node `i`'s incoming edges, in edge order: `incoming[offsets[i]..offsets[i + 1]]`.
-    offsets: Vec<u32>,
+    offsets: Vec<usize>,
     incoming: Vec<u32>,
 }
 
@@ -40,20 +41,7 @@ impl InferEdgeSet {
     /// From `[sender, receiver]` pairs; errors on an endpoint `≥ node_count`.
     pub fn new(node_count: usize, edges: &[[u32; 2]]) -> crate::Result<Self> {
         let (senders, receivers) = split_edges(node_count, edges)?;
-        let mut offsets = vec![0u32; node_count + 1];
-        for &r in &receivers {
-            offsets[r as usize + 1] += 1;
-        }
-        for i in 0..node_count {
-            offsets[i + 1] += offsets[i];
-        }
-        let mut next = offsets.clone();
-        let mut incoming = vec![0u32; edges.len()];
-        for (edge, &r) in receivers.iter().enumerate() {
-            let slot = &mut next[r as usize];
-            incoming[*slot as usize] = edge as u32;
-            *slot += 1;
-        }
+        let (offsets, incoming) = group_by_key(node_count, &receivers);
         let (endpoints, senders, receivers) = endpoint_positions(node_count, &senders, &receivers);
         Ok(InferEdgeSet {
             node_count,
@@ -77,7 +65,7 @@ impl InferEdgeSet {
 
     /// The incoming edges of node `i`, in edge order.
     fn incoming(&self, i: usize) -> &[u32] {
-        &self.incoming[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+        &self.incoming[self.offsets[i]..self.offsets[i + 1]]
     }
 }
 
@@ -262,14 +250,7 @@ impl InferProcessor {
         sets: &[InferEdgeSet],
         edges: &mut [Features],
     ) -> crate::Result<()> {
-        if sets.len() != self.edge_sets || edges.len() != self.edge_sets {
-            return Err(NnError::Config(format!(
-                "a processor over {} edge sets got {} edge sets and {} edge latents",
-                self.edge_sets,
-                sets.len(),
-                edges.len()
-            )));
-        }
+        check_sets(self.edge_sets, sets.len(), edges.len())?;
         nodes.check_width("processor nodes", self.latent)?;
         for (set, e) in sets.iter().zip(edges.iter()) {
             if set.node_count != nodes.rows() {
