@@ -901,19 +901,21 @@ impl TrainTask for HoodTask {
                 cur: &cur,
             };
             let (graph, advance) = scene.step(state, at, &self.config)?;
-            let out = model.forward(HoodInput::new(&[&graph], &self.stats, &self.device)?)?;
-            let x = next_positions(out, &[&advance], &self.stats, &self.device)?;
+            // The implicit step from the same state, once for both solver terms. It does
+            // not depend on the network, so it runs beside the forward pass: each uses
+            // the other's idle thread, and neither's result depends on the threads.
+            let wants_target = terms.contains(&Term::Solver) || edges.is_some();
+            let (target, out) = rayon::join(
+                || wants_target.then(|| scene.implicit_step(state, at)),
+                || model.forward(HoodInput::new(&[&graph], &self.stats, &self.device)?),
+            );
+            let x = next_positions(out?, &[&advance], &self.stats, &self.device)?;
             let n = graph.garment_nodes;
             let potential = self.potential_terms(&scene, &cur, &advance, at, weight)?;
             let x3 = x.clone().reshape([1, n, 3]);
-            // The implicit step from the same state, once for both solver terms.
-            let target = if terms.contains(&Term::Solver) || edges.is_some() {
-                Some(positions_tensor(
-                    &scene.implicit_step(state, at)?,
-                    &self.device,
-                ))
-            } else {
-                None
+            let target = match target {
+                Some(target) => Some(positions_tensor(&target?, &self.device)),
+                None => None,
             };
             for (slot, term) in sums.iter_mut().zip(terms) {
                 let loss = match (term, &target, &edges) {
