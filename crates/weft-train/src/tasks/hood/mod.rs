@@ -901,17 +901,23 @@ impl TrainTask for HoodTask {
                 cur: &cur,
             };
             let (graph, advance) = scene.step(state, at, &self.config)?;
-            // The implicit step from the same state, once for both solver terms. It does
-            // not depend on the network, so it runs beside the forward pass: each uses
-            // the other's idle thread, and neither's result depends on the threads.
+            // The step's potential and the implicit step from the same state (once for
+            // both solver terms) do not depend on the network, so they run beside the
+            // forward pass: each uses the other's idle thread, and no result depends on
+            // the threads.
             let wants_target = terms.contains(&Term::Solver) || edges.is_some();
-            let (target, out) = rayon::join(
-                || wants_target.then(|| scene.implicit_step(state, at)),
+            let ((potential, target), out) = rayon::join(
+                || {
+                    (
+                        self.potential_terms(&scene, &cur, &advance, at, weight),
+                        wants_target.then(|| scene.implicit_step(state, at)),
+                    )
+                },
                 || model.forward(HoodInput::new(&[&graph], &self.stats, &self.device)?),
             );
             let x = next_positions(out?, &[&advance], &self.stats, &self.device)?;
             let n = graph.garment_nodes;
-            let potential = self.potential_terms(&scene, &cur, &advance, at, weight)?;
+            let potential = potential?;
             let x3 = x.clone().reshape([1, n, 3]);
             let target = match target {
                 Some(target) => Some(positions_tensor(&target?, &self.device)),
