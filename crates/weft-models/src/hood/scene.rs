@@ -347,8 +347,15 @@ impl Scene {
 
     /// The step `at` from `state` as weft-sim's implicit Euler takes it (Newton on the
     /// same incremental potential HOOD is trained on, the pinned vertices at their
-    /// targets): the reference a HOOD step is measured against.
-    pub fn implicit_step(&self, state: StateRef, at: StepAt) -> Result<Vec<[f64; 3]>, ModelError> {
+    /// targets): the reference a HOOD step is measured against. `body` is the step's
+    /// [`Scene::contact_body`], which a caller that also builds the step's potential
+    /// builds once for both.
+    pub fn implicit_step(
+        &self,
+        state: StateRef,
+        at: StepAt,
+        body: &(dyn BodyProximity + Sync),
+    ) -> Result<Vec<[f64; 3]>, ModelError> {
         let sim = |e: weft_sim::SimError| ModelError::Garment(format!("the implicit step: {e}"));
         let mut solver = ClothSimulator::from_model(self.cloth_at(at).into_owned()).map_err(sim)?;
         let v = state
@@ -363,8 +370,7 @@ impl Scene {
         for (i, _) in self.garment.pinned.iter().enumerate().filter(|(_, &p)| p) {
             solver.move_pin(i as u32, targets[i]).map_err(sim)?;
         }
-        let body = self.contact_body(at)?;
-        solver.step(at.dt, Some(body.as_ref())).map_err(sim)?;
+        solver.step(at.dt, Some(body)).map_err(sim)?;
         Ok(solver.positions().to_vec())
     }
 }

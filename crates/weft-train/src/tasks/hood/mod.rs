@@ -52,7 +52,7 @@ use weft_models::hood::{
 use weft_models::Clip;
 use weft_motion::{MotionKind, ProceduralParams};
 use weft_nn::adjacency::index_tensor;
-use weft_sim::{sample_hood_material, Attachment, Energy, Material, StepInputs};
+use weft_sim::{sample_hood_material, Attachment, BodyProximity, Energy, Material, StepInputs};
 
 pub use config::{HoodRun, HoodTraining, COLLISION_LEVELS, OPEN_FRONT_BUTTONS};
 
@@ -631,7 +631,8 @@ impl HoodTask {
             };
             let (graph, _) = scene.step(start.as_ref(), at, &self.config)?;
             let (prev, cur) = (&start.prev, &start.cur);
-            let next = scene.implicit_step(start.as_ref(), at)?;
+            let body = scene.contact_body(at)?;
+            let next = scene.implicit_step(start.as_ref(), at, body.as_ref())?;
             let mut accel = Vec::with_capacity(3 * cur.len());
             for i in (0..cur.len()).filter(|&i| !scene.garment.pinned[i]) {
                 accel.extend((0..3).map(|k| (next[i][k] - 2.0 * cur[i][k] + prev[i][k]) as f32));
@@ -642,16 +643,16 @@ impl HoodTask {
     }
 
     /// The potential of step `at` of `scene` from `cur` (inertial target from
-    /// `advance`), each term with its weight.
+    /// `advance`) against the step's contact `body`, each term with its weight.
     fn potential_terms(
         &self,
         scene: &Scene,
         cur: &[[f64; 3]],
         advance: &Advance,
         at: StepAt,
+        body: &(dyn BodyProximity + Sync),
         collision_weight: f64,
     ) -> Result<Vec<Arc<dyn Energy + Send + Sync>>> {
-        let body = scene.contact_body(at)?;
         let dt = at.dt;
         let target = advance.inertial_target();
         let cloth = scene.cloth_at(at);
@@ -661,7 +662,7 @@ impl HoodTask {
             target: &target,
             dt,
             pinned: &scene.garment.pinned,
-            body: Some(body.as_ref()),
+            body: Some(body),
             collision_stiffness: Some(stiffness),
         })?;
         Ok(PotentialTerm::all(potential))
@@ -902,27 +903,28 @@ impl TrainTask for HoodTask {
             };
             let (graph, advance) = scene.step(state, at, &self.config)?;
             // The step's potential and the implicit step from the same state (once for
-            // both solver terms) do not depend on the network, so they run beside the
-            // forward pass: each uses the other's idle thread, and no result depends on
-            // the threads.
+            // both solver terms), on one contact body, do not depend on the network, so
+            // they run beside the forward pass: each uses the other's idle thread, and no
+            // result depends on the threads.
             let wants_target = terms.contains(&Term::Solver) || edges.is_some();
-            let ((potential, target), out) = rayon::join(
-                || {
-                    (
-                        self.potential_terms(&scene, &cur, &advance, at, weight),
-                        wants_target.then(|| scene.implicit_step(state, at)),
-                    )
+            let (physics, out) = rayon::join(
+                || -> Result<_> {
+                    let body = scene.contact_body(at)?;
+                    let potential =
+                        self.potential_terms(&scene, &cur, &advance, at, body.as_ref(), weight)?;
+                    let target = match wants_target {
+                        true => Some(scene.implicit_step(state, at, body.as_ref())?),
+                        false => None,
+                    };
+                    Ok((potential, target))
                 },
                 || model.forward(HoodInput::new(&[&graph], &self.stats, &self.device)?),
             );
             let x = next_positions(out?, &[&advance], &self.stats, &self.device)?;
             let n = graph.garment_nodes;
-            let potential = potential?;
+            let (potential, target) = physics?;
             let x3 = x.clone().reshape([1, n, 3]);
-            let target = match target {
-                Some(target) => Some(positions_tensor(&target?, &self.device)),
-                None => None,
-            };
+            let target = target.map(|target| positions_tensor(&target, &self.device));
             for (slot, term) in sums.iter_mut().zip(terms) {
                 let loss = match (term, &target, &edges) {
                     (Term::Solver, Some(target), _) => solver_loss(x.clone(), target.clone()),
@@ -1032,7 +1034,9 @@ impl TrainTask for HoodTask {
                         buttoned: true,
                     };
                     let (_, advance) = scene.step(StateRef { prev, cur }, at, &self.config)?;
-                    let terms = self.potential_terms(scene, cur, &advance, at, 1.0)?;
+                    let body = scene.contact_body(at)?;
+                    let terms =
+                        self.potential_terms(scene, cur, &advance, at, body.as_ref(), 1.0)?;
                     let mut g = vec![[0.0; 3]; x.len()];
                     for e in &terms {
                         potential += e.add_gradient(x, 1.0, &mut g)?;
