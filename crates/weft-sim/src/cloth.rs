@@ -29,12 +29,13 @@
 use std::sync::Arc;
 
 use rayon::prelude::*;
+use weft_mesh::vec3::add;
 use weft_mesh::{Hinge, Topology, TriMesh};
 
 use crate::bending::Bending;
 use crate::buttons::Buttons;
 use crate::collision::CubicCollision;
-use crate::contact::{BodyProximity, Clearance, Proximity, VertexContact};
+use crate::contact::{BodyProximity, Clearance, Grip, Proximity, VertexContact};
 use crate::error::{check_count, check_len, check_nonneg, check_vertex, SimError};
 use crate::friction::{Friction, FrictionContact};
 use crate::gravity::{lumped_masses, Gravity};
@@ -103,6 +104,9 @@ pub struct StepContacts {
     /// HOOD friction contacts: every free vertex within
     /// [`SimOptions::friction_radius`] whose friction coefficient is positive.
     pub friction: Vec<FrictionContact>,
+    /// One per `collision` contact, in its order: the anchor and friction coefficient
+    /// that [`project_contacts`](crate::project_contacts) holds the vertex with.
+    pub grips: Vec<Grip>,
 }
 
 impl ClothModel {
@@ -453,13 +457,17 @@ impl ClothModel {
         for (i, c, m) in found {
             let p = start[i as usize];
             let d = c.signed_distance(p);
+            let mu = self.friction[i as usize];
             if d < o.contact_radius {
                 out.collision.push(VertexContact {
                     vertex: i,
                     contact: c,
                 });
+                out.grips.push(Grip {
+                    anchor: add(p, m),
+                    mu,
+                });
             }
-            let mu = self.friction[i as usize];
             if d < o.friction_radius && mu > 0.0 {
                 let before: [f64; 3] = std::array::from_fn(|k| c.point[k] - m[k]);
                 out.friction.push(FrictionContact::hood(

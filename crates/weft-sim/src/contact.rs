@@ -9,6 +9,7 @@
 
 use crate::error::{check_vertex, SimError};
 use crate::math::{finite3, v3};
+use weft_mesh::vec3::{add, dot, norm, scale, sub};
 
 /// The closest body point to a garment vertex and the body's outward unit normal there.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,27 +38,66 @@ pub struct VertexContact {
     pub contact: BodyContact,
 }
 
+/// What [`project_contacts`]' friction needs of one contact: where its vertex would be
+/// had it stuck over the step to the body point it touched (`x_t + Δp_body`, the anchor
+/// of HOOD's friction term, [`crate::FrictionContact`]) and the friction coefficient.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grip {
+    /// `x_t + Δp_body`, m.
+    pub anchor: [f64; 3],
+    /// Friction coefficient μ (0: the vertex slides freely).
+    pub mu: f64,
+}
+
 /// The hard form of the cubic collision term's constraint `(x − p)·n ≥ ε`: every
 /// contact's vertex nearer than `margin` to its contact plane, or behind it, moves along
 /// the normal onto the plane at `margin`. For a step that is not the potential's
 /// minimiser (a learned one), where the penalty alone lets a fast limb through the
 /// cloth. Returns how many vertices moved; errors on a contact vertex out of range.
+///
+/// With `grips` (one per contact, or none for frictionless planes), each moved vertex
+/// also takes Coulomb friction in position form (Müller et al. 2007, Macklin et al.
+/// 2014): the tangential part of its displacement from the anchor is taken away up to
+/// μ times the normal correction (static friction), and shortened by that much beyond
+/// it (sliding). Without it a limb that sweeps into the cloth pushes each vertex out
+/// along its own plane, those in front of a running thigh to either side of it, and
+/// the sheet is cut in two; with it they move on with the body points they touched.
 pub fn project_contacts(
     x: &mut [[f64; 3]],
     contacts: &[VertexContact],
+    grips: &[Grip],
     margin: f64,
 ) -> Result<usize, SimError> {
     crate::error::check_nonneg(|| "contact margin".into(), margin, false)?;
+    if !grips.is_empty() {
+        crate::error::check_len("contact grips", contacts.len(), grips.len())?;
+    }
+    if let Some(i) = grips
+        .iter()
+        .position(|g| !(finite3(g.anchor) && g.mu.is_finite() && g.mu >= 0.0))
+    {
+        return Err(SimError::InvalidVector {
+            what: format!("contact grip {i}"),
+            message: "expected a finite anchor and a finite, non-negative μ",
+        });
+    }
     let mut moved = 0;
     for (i, c) in contacts.iter().enumerate() {
         check_vertex("contact", i, c.vertex, x.len())?;
         let p = &mut x[c.vertex as usize];
+        let n = c.contact.normal;
         let gap = margin - c.contact.signed_distance(*p);
-        if gap > 0.0 {
-            for (x, n) in p.iter_mut().zip(c.contact.normal) {
-                *x += gap * n;
-            }
-            moved += 1;
+        if gap <= 0.0 {
+            continue;
+        }
+        *p = add(*p, scale(n, gap));
+        moved += 1;
+        if let Some(g) = grips.get(i).filter(|g| g.mu > 0.0) {
+            let u = sub(*p, g.anchor);
+            let slip = sub(u, scale(n, dot(u, n)));
+            let (len, hold) = (norm(slip), g.mu * gap);
+            let taken = if len <= hold { 1.0 } else { hold / len };
+            *p = sub(*p, scale(slip, taken));
         }
     }
     Ok(moved)
@@ -279,13 +319,59 @@ mod tests {
         };
         // Behind the plane, in front within the margin, in front beyond it.
         let mut x = vec![[0.3, -0.05, 0.1], [0.0, 0.001, 0.0], [1.0, 0.5, 0.0]];
-        let moved = project_contacts(&mut x, &[floor(0), floor(1), floor(2)], 0.004).unwrap();
+        let contacts = [floor(0), floor(1), floor(2)];
+        let moved = project_contacts(&mut x, &contacts, &[], 0.004).unwrap();
         assert_eq!(moved, 2);
         assert!((x[0][1] - 0.004).abs() < 1e-15 && x[0][0] == 0.3 && x[0][2] == 0.1);
         assert!((x[1][1] - 0.004).abs() < 1e-15);
         assert_eq!(x[2], [1.0, 0.5, 0.0]);
-        let err = project_contacts(&mut x, &[floor(3)], 0.004).unwrap_err();
+        let err = project_contacts(&mut x, &[floor(3)], &[], 0.004).unwrap_err();
         assert!(err.to_string().contains("contact"), "{err}");
-        assert!(project_contacts(&mut x, &[floor(0)], -1.0).is_err());
+        assert!(project_contacts(&mut x, &[floor(0)], &[], -1.0).is_err());
+    }
+
+    /// The normal correction of a vertex 5 cm behind the floor is 5.4 cm, so μ = 0.5
+    /// holds it to an anchor up to 2.7 cm along the floor and slides it that far
+    /// towards one farther; a vertex the floor does not move takes no friction.
+    #[test]
+    fn friction_holds_a_projected_vertex_to_its_anchor_up_to_mu_times_the_push() {
+        let floor = |vertex| VertexContact {
+            vertex,
+            contact: BodyContact {
+                point: [0.0; 3],
+                normal: [0.0, 1.0, 0.0],
+            },
+        };
+        let grip = |x: f64, mu| Grip {
+            anchor: [x, 0.004, 0.0],
+            mu,
+        };
+        let contacts = [floor(0), floor(1), floor(2), floor(3)];
+        let mut x = vec![
+            [0.0, -0.05, 0.0],
+            [0.0, -0.05, 0.0],
+            [0.0, -0.05, 0.0],
+            [0.0, 0.5, 0.0],
+        ];
+        let grips = [
+            grip(0.02, 0.5),
+            grip(0.1, 0.5),
+            grip(0.1, 0.0),
+            grip(0.1, 0.5),
+        ];
+        assert_eq!(
+            project_contacts(&mut x, &contacts, &grips, 0.004).unwrap(),
+            3
+        );
+        let near = |a: [f64; 3], b: [f64; 3]| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-12);
+        assert!(near(x[0], [0.02, 0.004, 0.0]), "{:?}", x[0]);
+        assert!(near(x[1], [0.027, 0.004, 0.0]), "{:?}", x[1]);
+        assert!(near(x[2], [0.0, 0.004, 0.0]), "{:?}", x[2]);
+        assert_eq!(x[3], [0.0, 0.5, 0.0]);
+        // One grip per contact, finite, μ ≥ 0.
+        assert!(project_contacts(&mut x, &contacts, &grips[..2], 0.004).is_err());
+        let bad = [grip(0.0, -0.5), grips[1], grips[2], grips[3]];
+        let err = project_contacts(&mut x, &contacts, &bad, 0.004).unwrap_err();
+        assert!(err.to_string().contains("grip 0"), "{err}");
     }
 }

@@ -61,7 +61,7 @@ pub use buttons::Buttons;
 pub use cloth::{ClothModel, StepContacts, StepInputs};
 pub use collision::CubicCollision;
 pub use contact::{
-    project_contacts, BodyContact, BodyProximity, Clearance, Plane, Proximity, Sphere,
+    project_contacts, BodyContact, BodyProximity, Clearance, Grip, Plane, Proximity, Sphere,
     VertexContact,
 };
 pub use elastic_skin::{ConeVolume, ElasticSkin, ElasticSkinParams, ElasticSkinReport};

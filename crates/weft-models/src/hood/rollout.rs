@@ -101,8 +101,9 @@ pub struct RolloutOptions {
     pub strain_limit: Option<f64>,
     /// Run-time contact projection: after every step (and after the strain limit),
     /// vertices nearer than this (m) to the collision term's contact planes, or behind
-    /// them, move onto them at this distance ([`project_contacts`]); free vertices still
-    /// inside the body or nearer to it then move to its closest point plus this
+    /// them, move onto them at this distance ([`project_contacts`], with the friction
+    /// of the garment's material against the body points they touched); free vertices
+    /// still inside the body or nearer to it then move to its closest point plus this
     /// distance. `None`: off (HOOD).
     pub contact_margin: Option<f64>,
 }
@@ -215,7 +216,8 @@ fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Opt
 /// `options`' run-time corrections of the step `at` from `cur` to `next`: the strain
 /// limit, then the contact projection against the planes the collision term uses
 /// (found from `cur`, on the swept body when the run uses swept contacts, so a limb
-/// that passed through the cloth in the step pushes it back to its side), with both
+/// that passed through the cloth in the step pushes it back to its side, and the
+/// material's friction carries it on with the limb), with both
 /// given [`CONTACT_ROUNDS`] rounds of the two, then the push-out of what is still
 /// inside. The rollout goes on from the corrected positions.
 fn correct(
@@ -245,7 +247,7 @@ fn correct(
             .contacts(cur, &scene.garment.pinned, Some(body.as_ref()))
             .map_err(|e| failed("the contacts", e))?;
         let project = |x: &mut [[f64; 3]]| {
-            project_contacts(x, &contacts.collision, margin)
+            project_contacts(x, &contacts.collision, &contacts.grips, margin)
                 .map_err(|e| failed("the contact projection", e))
         };
         done.vertices_projected = project(next)?;
