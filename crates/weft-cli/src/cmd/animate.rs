@@ -55,8 +55,8 @@ pub struct AnimateArgs {
     /// this many millimetres of it, to its surface plus that distance. The network has
     /// no hard contact constraint (legs can pass through a predicted skirt); 4 is the
     /// margin garments are fitted with. A HOOD rollout does it after every step
-    /// instead, against the collision term's contact planes, and goes on from the
-    /// garment outside the body.
+    /// instead, against the collision term's contact planes with the material's
+    /// friction against the body, and goes on from the garment outside the body.
     #[arg(long, value_name = "MM")]
     push_out: Option<f64>,
     /// The β the garment was made for (comma-separated), when that is not the --betas
