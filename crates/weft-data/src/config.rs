@@ -238,7 +238,8 @@ fn motion(kind: &str, seed: u64, frames: Option<usize>) -> MotionSpec {
     }
 }
 
-/// The fit presets' warm-up frames: their garments start draped ([`DataConfig::garment_body`]).
+/// The fit presets' warm-up frames: each garment starts draped on its body
+/// ([`DataConfig::garment_body`], `fit_onto`), so the warm-up only brings the pose in.
 const GARFIT_WARMUP_FRAMES: usize = 10;
 
 impl DataConfig {
@@ -460,8 +461,6 @@ impl DataConfig {
             frames: 40,
             material: "silk".into(),
             garment_body: Some(vec![0.0]),
-            // Each garment starts draped on its body (`fit_onto`): the warm-up only
-            // brings the pose in.
             warmup_frames: GARFIT_WARMUP_FRAMES,
             train: SplitConfig {
                 betas: [-1.8, -0.6, 0.6, 1.8].map(weight).to_vec(),
@@ -542,8 +541,6 @@ impl DataConfig {
             frames: 305,
             material: "silk".into(),
             garment_body: Some(vec![0.0]),
-            // Each garment starts draped on its body (`fit_onto`): the warm-up only
-            // brings the pose in.
             warmup_frames: GARFIT_WARMUP_FRAMES,
             train: SplitConfig {
                 betas: [-2.0, -1.5, -1.0, -0.5, 0.5, 1.0, 1.5, 2.0]

@@ -308,15 +308,19 @@ mod tests {
         assert!(validate_contacts(vec![c([0.0, 1.0, 0.0])], 0).is_err());
     }
 
-    #[test]
-    fn projection_moves_only_vertices_nearer_than_the_margin_onto_it() {
-        let floor = |vertex| VertexContact {
+    /// `vertex`'s contact with the floor `y = 0`.
+    fn floor(vertex: u32) -> VertexContact {
+        VertexContact {
             vertex,
             contact: BodyContact {
                 point: [0.0; 3],
                 normal: [0.0, 1.0, 0.0],
             },
-        };
+        }
+    }
+
+    #[test]
+    fn projection_moves_only_vertices_nearer_than_the_margin_onto_it() {
         // Behind the plane, in front within the margin, in front beyond it.
         let mut x = vec![[0.3, -0.05, 0.1], [0.0, 0.001, 0.0], [1.0, 0.5, 0.0]];
         let contacts = [floor(0), floor(1), floor(2)];
@@ -335,13 +339,6 @@ mod tests {
     /// towards one farther; a vertex the floor does not move takes no friction.
     #[test]
     fn friction_holds_a_projected_vertex_to_its_anchor_up_to_mu_times_the_push() {
-        let floor = |vertex| VertexContact {
-            vertex,
-            contact: BodyContact {
-                point: [0.0; 3],
-                normal: [0.0, 1.0, 0.0],
-            },
-        };
         let grip = |x: f64, mu| Grip {
             anchor: [x, 0.004, 0.0],
             mu,

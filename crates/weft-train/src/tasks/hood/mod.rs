@@ -912,9 +912,10 @@ impl TrainTask for HoodTask {
                     let body = scene.contact_body(at)?;
                     let potential =
                         self.potential_terms(&scene, &cur, &advance, at, body.as_ref(), weight)?;
-                    let target = match wants_target {
-                        true => Some(scene.implicit_step(state, at, body.as_ref())?),
-                        false => None,
+                    let target = if wants_target {
+                        Some(scene.implicit_step(state, at, body.as_ref())?)
+                    } else {
+                        None
                     };
                     Ok((potential, target))
                 },
