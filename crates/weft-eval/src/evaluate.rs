@@ -250,13 +250,13 @@ impl<'a> Evaluator<'a> {
         };
         let topology = GarmentTopology::new(&seq.garment)?;
         let kind = seq.record.garment_kind.clone();
+        // This sequence's metrics per method, merged into the per-kind ones below.
+        let mut this: Vec<FrameMetrics> =
+            self.methods.iter().map(|_| FrameMetrics::new()).collect();
         let mut score = |t: usize, surface: Option<&BodySurface>| -> Result<(), EvalError> {
-            for (scores, frames) in self.scores.iter_mut().zip(&predicted) {
-                scores
-                    .get(&kind)
-                    .push_frame(&topology, &frames[t], &seq.positions[t], surface)?;
+            for (scores, frames) in this.iter_mut().zip(&predicted) {
+                scores.push_frame(&topology, &frames[t], &seq.positions[t], surface)?;
             }
-            self.frames += 1;
             Ok(())
         };
         // `bodies` holds one frame per ground-truth frame (the clip was cut to them).
@@ -264,6 +264,10 @@ impl<'a> Evaluator<'a> {
             (Some(b), true) => b.for_each_surface(|t, s| score(t, Some(s)))?,
             _ => (0..seq.positions.len()).try_for_each(|t| score(t, None))?,
         }
+        for (scores, m) in self.scores.iter_mut().zip(&this) {
+            scores.get(&kind).merge(m);
+        }
+        self.frames += seq.positions.len() as u64;
         if self.sequences == 0 && !self.opts.fps_batches.is_empty() {
             for (m, fps) in self.methods.iter().zip(&mut self.fps) {
                 *fps = m
@@ -290,6 +294,7 @@ impl<'a> Evaluator<'a> {
             betas: seq.record.betas.clone(),
             frames: seq.positions.len(),
             e_verts_mm: means.clone(),
+            collision_rate: this.iter().map(|m| m.summary().collision_rate).collect(),
         });
         if self.example.is_none() {
             if let Some(bodies) = bodies {
@@ -372,12 +377,17 @@ fn picture_frames(count: usize) -> Vec<usize> {
     f
 }
 
-/// The error table and, when timed, the speed table of `r` as HTML sections (the
-/// evaluation report and the demo report show the same two).
+/// The error table, the per-sequence table and, when timed, the speed table of `r` as
+/// HTML sections (the evaluation report and the demo report show the same ones).
 pub fn error_and_speed_tables(r: &EvalReport, html: &mut Report) {
     html.heading("Errors against the simulated ground truth");
     let (h, rows) = r.table();
     html.table(h, rows);
+    if !r.per_sequence.is_empty() {
+        html.heading("Per sequence");
+        let (h, rows) = r.sequence_table();
+        html.table(h, rows);
+    }
     if r.timed() {
         html.heading("Inference speed");
         let (h, rows) = r.fps_table();

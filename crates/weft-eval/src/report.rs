@@ -82,6 +82,10 @@ pub struct SequenceScore {
     pub frames: usize,
     /// Mean vertex error (mm) of each method, in the order of [`EvalReport::methods`].
     pub e_verts_mm: Vec<f64>,
+    /// Share of each method's vertices inside the body over the sequence (`None` without
+    /// the collision check; empty in reports written before it was recorded).
+    #[serde(default)]
+    pub collision_rate: Vec<Option<f64>>,
 }
 
 /// `1 − E_model / E_base` of the mean vertex errors: the share by which `model` is below
@@ -95,9 +99,12 @@ fn pct(x: Option<f64>) -> String {
     x.map_or("–".to_owned(), |v| format!("{:.1} %", 100.0 * v))
 }
 
+fn pct_2(x: Option<f64>) -> String {
+    x.map_or("–".to_owned(), |c| format!("{:.2} %", 100.0 * c))
+}
+
 fn collision(s: &MetricsSummary) -> String {
-    s.collision_rate
-        .map_or("–".to_owned(), |c| format!("{:.2} %", 100.0 * c))
+    pct_2(s.collision_rate)
 }
 
 impl EvalReport {
@@ -172,6 +179,30 @@ impl EvalReport {
                 } else {
                     pct(lbs.as_ref().and_then(|b| reduction(&m.overall, b)))
                 });
+                row
+            })
+            .collect();
+        (header, rows)
+    }
+
+    /// Header and rows of the per-sequence table: one row per sequence, each method's
+    /// mean vertex error and (when checked) share of vertices inside the body.
+    pub fn sequence_table(&self) -> (Vec<String>, Vec<Vec<String>>) {
+        let mut header = vec!["sequence".to_owned()];
+        header.extend(
+            self.methods
+                .iter()
+                .map(|m| format!("{}: E_verts (mm) / inside", m.name)),
+        );
+        let rows = self
+            .per_sequence
+            .iter()
+            .map(|q| {
+                let mut row = vec![q.id.clone()];
+                row.extend(q.e_verts_mm.iter().enumerate().map(|(i, e)| {
+                    let inside = q.collision_rate.get(i).copied().flatten();
+                    format!("{e:.2} / {}", pct_2(inside))
+                }));
                 row
             })
             .collect();
@@ -256,6 +287,12 @@ impl EvalReport {
             s,
             "\nErrors are mean (± std) over every vertex of every frame; E_norm over vertices with a defined normal. Collisions: share of garment vertices inside the posed body.\n"
         );
+        if !self.per_sequence.is_empty() {
+            let _ = writeln!(s, "## Per sequence\n");
+            let (h, rows) = self.sequence_table();
+            markdown_table(&mut s, &h, &rows);
+            let _ = writeln!(s);
+        }
         if self.timed() {
             let _ = writeln!(s, "## Inference speed\n");
             let (h, rows) = self.fps_table();

@@ -159,6 +159,20 @@ fn scores_a_known_truth_and_writes_the_report() {
     assert!(base.overall.e_norm_deg.mean < 0.01);
     assert!(base.per_kind.contains_key("skirt"));
     assert!(base.overall.collision_rate.is_some());
+    // Each sequence's share of vertices inside the body, per method; over the two
+    // sequences (same vertex count) they make up each method's overall share.
+    assert_eq!(r.per_sequence.len(), 2);
+    for (i, m) in r.methods.iter().enumerate() {
+        let [a, b] = [&r.per_sequence[0], &r.per_sequence[1]]
+            .map(|q| q.collision_rate[i].expect("collisions were checked"));
+        let overall = m.overall.collision_rate.unwrap();
+        let weighted = (a * frames as f64 + b * 2.0) / (frames + 2) as f64;
+        assert!(
+            (weighted - overall).abs() < 1e-12,
+            "{}: {weighted} vs {overall}",
+            m.name
+        );
+    }
     let names: Vec<&str> = r.methods.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(names, [p.name().as_str(), LBS_NAME, DQS_NAME]);
     assert_eq!(r.methods[0].model.as_deref(), Some("multilevel"));
@@ -188,8 +202,11 @@ fn scores_a_known_truth_and_writes_the_report() {
     ] {
         assert!(dir.0.join(f).is_file(), "{f} missing");
     }
+    let md = std::fs::read_to_string(dir.0.join("eval.md")).unwrap();
+    assert!(md.contains("## Per sequence") && md.contains("LBS only: E_verts (mm) / inside"));
     let text = std::fs::read_to_string(html).unwrap();
     assert!(text.contains("LBS only") && text.contains("DQS only"));
+    assert!(text.contains("Per sequence"));
     assert!(text.contains("data:image/png;base64"));
 }
 
