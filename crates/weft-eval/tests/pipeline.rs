@@ -91,7 +91,7 @@ fn predictor(autodiff: bool) -> Predictor {
     } else {
         weft_nn::backend::cpu()
     };
-    let cfg = MultilevelConfig::cpu();
+    let cfg = MultilevelConfig::new();
     Predictor::from_model(Multilevel::new(&cfg, &weft_nn::backend::seeded(&device, 5)).unwrap())
 }
 

@@ -30,7 +30,7 @@ type Positions = Vec<[f64; 3]>;
 #[ignore]
 fn training_beats_the_lbs_baseline_on_unseen_frames() {
     let c = case_with(GarmentKind::Skirt, 600, &[], 48);
-    let cfg = MultilevelConfig::cpu();
+    let cfg = MultilevelConfig::new();
     let g = GarmentInput::new(&c.garment, &c.body, &c.betas, &cfg).unwrap();
     let n = c.garment.vertex_count();
     let shaped = c.body.shaped(&[]).unwrap();

@@ -5,7 +5,7 @@ mod common;
 
 use common::{case, model};
 use weft_mesh::TriMesh;
-use weft_models::multilevel::{FrameInputs, GarmentInput, MultilevelConfig};
+use weft_models::multilevel::{FrameInputs, GarmentInput, MultilevelConfig, NO_DRAPE};
 use weft_models::Clip;
 use weft_models::ModelError;
 
@@ -19,9 +19,9 @@ fn message<T>(r: Result<T, ModelError>) -> String {
 #[test]
 fn skeleton_and_feature_mismatches_are_named() {
     let c = case();
-    let cfg = MultilevelConfig::cpu();
+    let cfg = MultilevelConfig::new();
     // A config for another skeleton.
-    let other = MultilevelConfig::cpu().with_joints(22);
+    let other = MultilevelConfig::new().with_joints(22);
     let m = message(GarmentInput::new(&c.garment, &c.body, &c.betas, &other));
     assert!(
         m.contains("joints") && m.contains("22") && m.contains("24"),
@@ -73,7 +73,7 @@ fn skeleton_and_feature_mismatches_are_named() {
 #[test]
 fn non_finite_and_out_of_range_inputs_are_refused() {
     let c = case();
-    let cfg = MultilevelConfig::cpu();
+    let cfg = MultilevelConfig::new();
     let mut garment = c.garment.clone();
     garment.positions[5][1] = f64::NAN;
     let m = message(GarmentInput::new(&garment, &c.body, &c.betas, &cfg));
@@ -156,7 +156,7 @@ fn non_finite_and_out_of_range_inputs_are_refused() {
 #[test]
 fn garments_too_small_or_broken_are_refused() {
     let c = case();
-    let cfg = MultilevelConfig::cpu();
+    let cfg = MultilevelConfig::new();
     let triangle = TriMesh::new(
         vec![[0.0, 1.0, 0.1], [0.1, 1.0, 0.1], [0.0, 1.1, 0.1]],
         vec![[0, 1, 2]],
@@ -181,6 +181,16 @@ fn configs_round_trip_through_toml_with_defaults() {
     assert_eq!(partial.feature_width, 8);
     assert_eq!(partial.gg_widths, MultilevelConfig::cpu().gg_widths);
     assert_eq!(partial.pooling, weft_models::multilevel::PoolingKind::TopK);
+    // The cpu preset drapes in silk; a run's table without `drape` did not drape (runs
+    // from before the preset draped have no such key), and "none" says off.
+    assert_eq!(MultilevelConfig::cpu().drape_material(), Some("silk"));
+    assert_eq!(partial.drape_material(), None);
+    let off = MultilevelConfig::cpu().with_drape(Some(NO_DRAPE.into()));
+    assert_eq!(off.drape_material(), None);
+    off.validate().unwrap();
+    let text = off.to_toml().unwrap();
+    assert!(text.contains("drape = \"none\""), "{text}");
+    assert_eq!(MultilevelConfig::from_toml(&text).unwrap(), off);
     let m = message(MultilevelConfig::preset("gpu"));
     assert!(m.contains("paper") && m.contains("gpu"), "{m}");
     let m = message(MultilevelConfig::from_toml("gg_widths = [8, 0]"));
@@ -195,9 +205,9 @@ fn configs_round_trip_through_toml_with_defaults() {
 #[test]
 fn drape_settles_the_template() {
     let c = case();
-    let cfg = MultilevelConfig::cpu().with_drape(Some("silk".into()));
+    let cfg = MultilevelConfig::cpu();
     let g = GarmentInput::new(&c.garment, &c.body, &c.betas, &cfg).unwrap();
-    let plain = GarmentInput::new(&c.garment, &c.body, &c.betas, &MultilevelConfig::cpu()).unwrap();
+    let plain = GarmentInput::new(&c.garment, &c.body, &c.betas, &MultilevelConfig::new()).unwrap();
     assert_eq!(g.vertex_count(), plain.vertex_count());
     let lowest = |rest: &[f32]| rest.chunks(3).map(|p| p[1]).fold(f32::INFINITY, f32::min);
     let widest = |rest: &[f32]| {

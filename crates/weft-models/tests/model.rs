@@ -36,7 +36,7 @@ fn inputs(
 #[test]
 fn forward_shapes_weights_and_lbs() {
     let c = case();
-    let cfg = MultilevelConfig::cpu();
+    let cfg = MultilevelConfig::new();
     let (g, f) = inputs(&c, &cfg, 2..6);
     let model = model(&cfg, 1, false);
     let pair = model.encode_pair(&g).unwrap();
@@ -64,7 +64,7 @@ fn forward_shapes_weights_and_lbs() {
 #[test]
 fn zero_gains_reproduce_transferred_lbs() {
     let c = case();
-    let cfg = MultilevelConfig::cpu()
+    let cfg = MultilevelConfig::new()
         .with_weight_gain(0.0)
         .with_blend_gain(0.0);
     let (g, f) = inputs(&c, &cfg, 3..5);
@@ -99,7 +99,7 @@ fn zero_gains_reproduce_transferred_lbs() {
 #[test]
 fn deterministic_for_a_seed_and_pair_cache_equals_recomputation() {
     let c = case();
-    let cfg = MultilevelConfig::cpu();
+    let cfg = MultilevelConfig::new();
     let (g, f) = inputs(&c, &cfg, 0..3);
     let run = |seed| {
         let model = model(&cfg, seed, false);
@@ -149,7 +149,7 @@ fn gradients_reach_every_parameter() {
         }
     }
     let c = case();
-    let cfg = MultilevelConfig::cpu();
+    let cfg = MultilevelConfig::new();
     let (g, f) = inputs(&c, &cfg, 1..3);
     let model = model(&cfg, 3, true);
     let p = model
@@ -173,7 +173,7 @@ fn gradients_reach_every_parameter() {
 fn every_pooling_kind_runs() {
     let c = case();
     for pooling in PoolingKind::ALL {
-        let cfg = MultilevelConfig::cpu()
+        let cfg = MultilevelConfig::new()
             .with_pooling(pooling)
             .with_mp_submodules(1);
         let (g, f) = inputs(&c, &cfg, 0..2);
@@ -191,7 +191,7 @@ fn every_pooling_kind_runs() {
 #[test]
 fn pair_encoding_from_feature_tensor() {
     let c = case();
-    let cfg = MultilevelConfig::cpu().with_mp_submodules(1);
+    let cfg = MultilevelConfig::new().with_mp_submodules(1);
     let (g, f) = inputs(&c, &cfg, 2..3);
     let net = model(&cfg, 9, true);
     let device = net.device();
@@ -217,7 +217,7 @@ fn pair_encoding_from_feature_tensor() {
 #[test]
 fn body_contact_enters_the_blend_shapes() {
     let c = case();
-    let cfg = MultilevelConfig::cpu();
+    let cfg = MultilevelConfig::new();
     assert!(cfg.body_contact, "the cpu preset reads body contact");
     assert!(!MultilevelConfig::paper().body_contact, "seed 000 has none");
     let (g, f) = inputs(&c, &cfg, 1..3);
@@ -251,7 +251,7 @@ fn body_contact_enters_the_blend_shapes() {
         assert!(gw.iter().any(|&x| x != 0.0) && gw.iter().all(|x| x.is_finite()));
     }
 
-    let off = MultilevelConfig::cpu().with_body_contact(false);
+    let off = MultilevelConfig::new().with_body_contact(false);
     let (_, plain) = inputs(&c, &off, 1..3);
     assert!(plain.contact.is_none());
     let e = net.forward(&pair, &g, &plain).unwrap_err().to_string();

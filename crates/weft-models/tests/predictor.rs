@@ -41,7 +41,7 @@ fn write_config(run: &Path, version: i64, preset: &str, cfg: &MultilevelConfig) 
 #[test]
 fn predictor_round_trip_and_mismatches() {
     let c = case();
-    let cfg = MultilevelConfig::cpu().with_mp_submodules(1);
+    let cfg = MultilevelConfig::new().with_mp_submodules(1);
     let net = model(&cfg, 11, false);
     let dir = TempDir::new("predictor");
     let run = dir.0.as_path();

@@ -107,7 +107,7 @@ fn temp_dir(name: &str) -> PathBuf {
 
 #[test]
 fn multilevel_trains_through_every_phase_and_resumes_bit_for_bit() {
-    let model_cfg = MultilevelConfig::cpu();
+    let model_cfg = MultilevelConfig::new();
     let cfg = config();
     let mut t = task(&model_cfg, &cfg);
     assert_eq!(t.validation_window_count(), 2);

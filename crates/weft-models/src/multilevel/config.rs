@@ -157,10 +157,15 @@ pub struct MultilevelConfig {
     /// Drape every garment on its body's rest pose with this material (a preset name of
     /// weft_sim::Material) before building its inputs (weft_garment::prepare::drape; not
     /// in seed 000): the template `T` the network deforms and skins is then the garment
-    /// as it hangs, not as it was cut. `None` (the default): the garment as given.
+    /// as it hangs, not as it was cut. `None` or [`NO_DRAPE`]: the garment as given (the
+    /// default; the `cpu` preset drapes in silk).
     #[config(default = "None")]
     pub drape: Option<String>,
 }
+
+/// The `drape` value that turns the drape off in a config file (TOML has no `None`, and
+/// a missing key takes the preset's value).
+pub const NO_DRAPE: &str = "none";
 
 /// Names [`MultilevelConfig::preset`] accepts.
 pub const PRESETS: [&str; 2] = ["paper", "cpu"];
@@ -187,9 +192,18 @@ impl MultilevelConfig {
     /// Narrow widths for CPU training on the tiny dataset (the defaults): E^gg [16, 32, 32]
     /// with 4 heads, F = 32, M^mp 16 channels × 4 heads, and the body contact input. Half these widths (F = 16,
     /// M^mp 8 channels) underfit the tiny dataset: the training error fell only from 66 to
-    /// 56 mm in 3 000 steps (docs/multilevel.md has the measurements).
+    /// 56 mm in 3 000 steps (docs/multilevel.md has the measurements). The template is
+    /// draped in silk (`drape`, the defaults otherwise): on settled ground truth the test
+    /// error fell from 34–36 % to 41–42 % below LBS (docs/multilevel.md, "Settled ground
+    /// truth").
     pub fn cpu() -> Self {
-        MultilevelConfig::new()
+        MultilevelConfig::new().with_drape(Some("silk".into()))
+    }
+
+    /// The material the template is draped in: `None` when `drape` is unset or
+    /// [`NO_DRAPE`].
+    pub fn drape_material(&self) -> Option<&str> {
+        self.drape.as_deref().filter(|m| *m != NO_DRAPE)
     }
 
     /// A preset by name (`paper` or `cpu`).
@@ -271,7 +285,7 @@ impl MultilevelConfig {
                 )));
             }
         }
-        if let Some(name) = &self.drape {
+        if let Some(name) = self.drape_material() {
             weft_sim::Material::preset(name).map_err(|e| {
                 ModelError::Config(format!("drape must name a material preset: {e}"))
             })?;
@@ -290,7 +304,7 @@ impl MultilevelConfig {
         toml::to_string(self).map_err(|e| ModelError::Config(format!("to TOML: {e}")))
     }
 
-    /// A config from TOML; missing fields take their defaults (the `cpu` preset's).
+    /// A config from a run's `[model]` TOML ([`Self::from_table`]).
     pub fn from_toml(text: &str) -> Result<Self, ModelError> {
         let table = weft_config::parse_table(text).map_err(|message| ModelError::RunToml {
             path: "<model config>".into(),
@@ -301,9 +315,12 @@ impl MultilevelConfig {
 
     /// A config from a parsed TOML table (the `[model]` table of a run's config.toml,
     /// read from `origin`): the `cpu` preset with the table laid over it by the one
-    /// configuration path (weft-config), so an unknown key is refused by name.
+    /// configuration path (weft-config), so an unknown key is refused by name. A table
+    /// without `drape` is of a run that did not drape (weft writes the whole table, and
+    /// runs from before the `cpu` preset draped have no such key), so it stays off.
     pub fn from_table(table: &toml::Table, origin: &str) -> Result<Self, ModelError> {
-        let cfg = weft_config::overlay(&Self::cpu(), table, origin, "model")?;
+        let base = Self::cpu().with_drape(None);
+        let cfg = weft_config::overlay(&base, table, origin, "model")?;
         cfg.validate()?;
         Ok(cfg)
     }

@@ -177,7 +177,7 @@ impl GarmentInput {
             )));
         }
         let draped;
-        let garment = match &cfg.drape {
+        let garment = match cfg.drape_material() {
             Some(material) => {
                 draped = drape_on(garment, body, betas, material)?;
                 &draped

@@ -18,7 +18,7 @@ pub mod model;
 pub mod mp;
 pub mod predictor;
 
-pub use config::{MultilevelConfig, PoolingKind, PRESETS};
+pub use config::{MultilevelConfig, PoolingKind, NO_DRAPE, PRESETS};
 pub use frames::FrameInputs;
 pub use garment::GarmentInput;
 pub use model::{Multilevel, PairEncoding, Prediction};
