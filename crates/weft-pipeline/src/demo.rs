@@ -49,18 +49,10 @@ pub struct DemoOptions {
     /// A micro configuration for tests: a two-sequence dataset of small garments, a few
     /// training steps, a short animation, 4 quadrature nodes.
     pub quick: bool,
-    /// Training steps; `None`: [`DEMO_STEPS`].
+    /// Training steps; `None`: the `cpu` preset's (10 000 steps of 2-frame windows,
+    /// about as long here as the 2 500 steps of 8 frames demos trained before).
     pub steps: Option<usize>,
 }
-
-/// The demo's training budget: the `cpu` preset's schedule (cosine rate, schedule step 2
-/// from 75 %) compressed to 2 500 steps, so that a fresh clone reaches the report in
-/// under ten minutes here (issue 16). Measured on the tiny test split (docs/benchmarks.md,
-/// 2026-11-28, fourth session): 2 500 steps 31.8 % below LBS with 0.05 % of the
-/// vertices inside the body, the preset's 3 000 steps 33.4 % and 0.13 %, 2 000 steps
-/// 28.8 % (under the 30 % the demo must keep). `weft demo --steps 3000` trains the
-/// preset's own budget.
-pub const DEMO_STEPS: usize = 2_500;
 
 /// Where the demo wrote what, and the headline figures.
 #[derive(Clone, Debug)]
@@ -191,10 +183,11 @@ pub fn run_demo(
         .then(|| MultilevelRun::from_run_dir(&run_dir).ok())
         .flatten()
         .map(|run| run.train.trainer.steps);
-    cfg.train.trainer.steps =
-        opts.steps
-            .or(earlier_steps)
-            .unwrap_or(if opts.quick { 6 } else { DEMO_STEPS });
+    cfg.train.trainer.steps = opts.steps.or(earlier_steps).unwrap_or(if opts.quick {
+        6
+    } else {
+        cfg.train.trainer.steps
+    });
     if opts.quick {
         cfg.train.task.window = 3;
         cfg.train.trainer.checkpoint_every = 3;

@@ -23,9 +23,8 @@ pub struct DemoArgs {
     /// every stage in a minute; the figures it reports mean nothing.
     #[arg(long)]
     quick: bool,
-    /// Training steps, at least 1 (default: 2 500, the cpu preset's schedule compressed;
-    /// 3 000 is the preset's own budget, as `weft train`: slower and a little more
-    /// accurate).
+    /// Training steps, at least 1 (default: the cpu preset's 10 000, as `weft train`;
+    /// fewer train faster and less accurately on the same schedule).
     #[arg(long)]
     steps: Option<std::num::NonZeroUsize>,
 }

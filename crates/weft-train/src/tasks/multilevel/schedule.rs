@@ -127,7 +127,7 @@ impl Default for ScheduleConfig {
 
 impl ScheduleConfig {
     /// The `cpu` preset's schedule: the paper's rules, and step 2 by 75 % of the run and
-    /// stretch and shear by 90 % at the latest. A 3 000-step run on the tiny dataset is 13
+    /// stretch and shear by 90 % at the latest. A 10 000-step run on the tiny dataset is 7
     /// epochs, and the rule's 50-epoch window never fires in it, so without the caps the
     /// collision term never trains. Measured on the tiny test split (docs/multilevel.md):
     /// E_verts 44.0 → 42.7 mm and collisions 5.5 → 3.3 % against supervised-only.
