@@ -84,13 +84,20 @@ fn train_writes_a_run_resumes_and_refuses_mismatches() {
     let o = weft(&["config", "show"]);
     let shown = stdout(&o);
     let config = dir.join("short.toml");
-    std::fs::write(
-        &config,
-        shown
-            .replace("checkpoint_every = 250", "checkpoint_every = 2")
-            .replace("validate_every = 250", "validate_every = 2"),
-    )
-    .unwrap();
+    let edited: Vec<&str> = shown
+        .lines()
+        .map(|l| {
+            if l.starts_with("checkpoint_every =") {
+                "checkpoint_every = 2"
+            } else if l.starts_with("validate_every =") {
+                "validate_every = 2"
+            } else {
+                l
+            }
+        })
+        .collect();
+    assert!(edited.contains(&"checkpoint_every = 2") && edited.contains(&"validate_every = 2"));
+    std::fs::write(&config, edited.join("\n")).unwrap();
     let run = dir.join("run");
     let args = |extra: &[&str]| -> Vec<String> {
         let mut v: Vec<String> = ["train", "--data", s(&data), "--out", s(&run), "--quiet"]
