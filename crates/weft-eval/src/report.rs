@@ -95,16 +95,11 @@ pub fn reduction(model: &MetricsSummary, base: &MetricsSummary) -> Option<f64> {
         .then(|| 1.0 - model.e_verts_mm.mean / base.e_verts_mm.mean)
 }
 
-fn pct(x: Option<f64>) -> String {
-    x.map_or("–".to_owned(), |v| format!("{:.1} %", 100.0 * v))
-}
-
-fn pct_2(x: Option<f64>) -> String {
-    x.map_or("–".to_owned(), |c| format!("{:.2} %", 100.0 * c))
-}
-
-fn collision(s: &MetricsSummary) -> String {
-    pct_2(s.collision_rate)
+/// A share as a percentage with `decimals` decimals, "–" when there is none.
+fn pct(x: Option<f64>, decimals: usize) -> String {
+    x.map_or("–".to_owned(), |v| {
+        format!("{:.*} %", decimals, 100.0 * v)
+    })
 }
 
 impl EvalReport {
@@ -169,7 +164,7 @@ impl EvalReport {
                 }
                 row.push(m.overall.e_verts_mm.mean_std(2));
                 row.push(m.overall.e_norm_deg.mean_std(2));
-                row.push(collision(&m.overall));
+                row.push(pct(m.overall.collision_rate, 2));
                 row.push(format!(
                     "{:.4} / {:.3}",
                     m.overall.edge_strain.mean, m.overall.edge_strain.max
@@ -177,7 +172,7 @@ impl EvalReport {
                 row.push(if m.name == LBS_NAME {
                     "–".to_owned()
                 } else {
-                    pct(lbs.as_ref().and_then(|b| reduction(&m.overall, b)))
+                    pct(lbs.as_ref().and_then(|b| reduction(&m.overall, b)), 1)
                 });
                 row
             })
@@ -201,7 +196,7 @@ impl EvalReport {
                 let mut row = vec![q.id.clone()];
                 row.extend(q.e_verts_mm.iter().enumerate().map(|(i, e)| {
                     let inside = q.collision_rate.get(i).copied().flatten();
-                    format!("{e:.2} / {}", pct_2(inside))
+                    format!("{e:.2} / {}", pct(inside, 2))
                 }));
                 row
             })
@@ -421,7 +416,10 @@ impl Comparison {
             row.push(if m.name == LBS_NAME {
                 "–".to_owned()
             } else {
-                pct(lbs.as_ref().and_then(|b| reduction(&m.overall, &b.overall)))
+                pct(
+                    lbs.as_ref().and_then(|b| reduction(&m.overall, &b.overall)),
+                    1,
+                )
             });
             row.push(fps);
             row
