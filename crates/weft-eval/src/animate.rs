@@ -166,6 +166,9 @@ pub struct AnimationCheck {
     pub inside: f64,
     /// The deepest of them, mm (0 when none is inside).
     pub deepest_mm: f64,
+    /// The frame with the largest share of its vertices inside the body, and that share
+    /// (where to look in the pictures; frame 0 with share 0 when none is inside).
+    pub worst_frame: (usize, f64),
     /// Vertex positions that were not finite (left out of the figures above).
     pub nonfinite: usize,
 }
@@ -186,10 +189,11 @@ pub fn check_animation(
     let topology = crate::metrics::GarmentTopology::new(garment)?;
     let (mut strain_sum, mut strain_count, mut strain_max) = (0.0, 0usize, 0.0f64);
     let (mut inside, mut checked, mut deepest, mut nonfinite) = (0usize, 0usize, 0.0f64, 0);
+    let mut worst_frame = (0, 0.0f64);
     // `posed` may run past the frames (a rollout that diverged): follow the body only
     // as far as they go.
     let mut body = MovingSurface::new(posed.faces());
-    for (frame, body_frame) in frames.iter().zip(posed.frames()) {
+    for (t, (frame, body_frame)) in frames.iter().zip(posed.frames()).enumerate() {
         let surface = body.frame(body_frame).map_err(BodyError::from)?;
         for e in crate::metrics::edge_strains(&topology.edges, &topology.rest_lengths, frame)? {
             if e.is_finite() {
@@ -204,12 +208,18 @@ pub fn check_animation(
             .filter(|p| p.iter().all(|x| x.is_finite()))
             .collect();
         nonfinite += frame.len() - finite.len();
+        let mut frame_inside = 0usize;
         for d in crate::metrics::body_signed_distances(surface, &finite)? {
             checked += 1;
             if d < 0.0 {
-                inside += 1;
+                frame_inside += 1;
                 deepest = deepest.max(-d);
             }
+        }
+        inside += frame_inside;
+        let share = frame_inside as f64 / finite.len().max(1) as f64;
+        if share > worst_frame.1 {
+            worst_frame = (t, share);
         }
     }
     Ok(AnimationCheck {
@@ -218,6 +228,7 @@ pub fn check_animation(
         strain_max,
         inside: inside as f64 / checked.max(1) as f64,
         deepest_mm: 1e3 * deepest,
+        worst_frame,
         nonfinite,
     })
 }
@@ -233,6 +244,10 @@ impl std::fmt::Display for AnimationCheck {
             100.0 * self.inside,
             self.deepest_mm
         )?;
+        if self.inside > 0.0 {
+            let (t, share) = self.worst_frame;
+            write!(f, " (most in frame {t}: {:.2} %)", 100.0 * share)?;
+        }
         if self.nonfinite > 0 {
             write!(f, "; {} non-finite vertex positions", self.nonfinite)?;
         }
@@ -332,5 +347,32 @@ mod tests {
             })
             .unwrap();
         assert!(push_out_of_body(&mut frames[..1], &posed, margin).is_err());
+    }
+
+    #[test]
+    fn check_counts_vertices_inside_and_names_the_worst_frame() {
+        let body = weft_body::default_body().unwrap();
+        let pelvis = body.joints(&vec![0.0; body.num_betas()]).unwrap()[0];
+        let inside = pelvis.map(|x| x as f32);
+        let far = [0.0f32, 0.0, 2.0];
+        let posed =
+            PosedSequence::new(&body, &[], &[[[0.0f32; 3]; 24]; 3], &[[0.0; 3]; 3]).unwrap();
+        // A one-triangle "garment", moved about whole.
+        let garment = TriMesh {
+            positions: vec![[0.0, 0.0, 2.0], [0.0, 0.1, 2.0], [0.1, 0.0, 2.0]],
+            faces: vec![[0, 1, 2]],
+        };
+        let frames = vec![
+            vec![far, far, far],
+            vec![inside, inside, far],
+            vec![inside, far, far],
+        ];
+        let check = check_animation(&garment, &frames, &posed).unwrap();
+        assert_eq!(check.frames, 3);
+        assert!((check.inside - 3.0 / 9.0).abs() < 1e-12, "{}", check.inside);
+        assert_eq!(check.worst_frame.0, 1);
+        assert!((check.worst_frame.1 - 2.0 / 3.0).abs() < 1e-12);
+        assert!(check.deepest_mm > 10.0, "{}", check.deepest_mm);
+        assert!(check.to_string().contains("most in frame 1"), "{check}");
     }
 }

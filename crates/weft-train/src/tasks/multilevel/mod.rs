@@ -100,6 +100,8 @@ pub struct MultilevelTask {
     cache_encodings: bool,
     /// The collision term's body surface ([`Pair::collision`]).
     surface: Option<PosedBody>,
+    /// The collision threshold ε of the current phase, m.
+    collision_eps: f64,
 }
 
 /// Garment inputs already built, by garment and body shape: a dataset puts each
@@ -175,7 +177,7 @@ impl Pair {
     }
 
     /// Eq. 4's energies for the window `range` at the prediction `x` (`T·N`,
-    /// frame-major). `surface` follows the posed body through the window: rebuilt on its
+    /// frame-major), threshold `eps`, contacts within `radius`. `surface` follows the posed body through the window: rebuilt on its
     /// first frame (or built, on the run's first collision term), refit on the next ones
     /// (a small motion between frames), and each frame's contacts are found against it
     /// before it moves on. One surface for the whole run keeps the numbering of its
@@ -189,7 +191,8 @@ impl Pair {
         body: &BodyModel,
         surface: &mut Option<PosedBody>,
         x: &[[f64; 3]],
-        weights: &TermWeights,
+        eps: f64,
+        radius: f64,
     ) -> Result<FrameEnergies> {
         let s = &self.seq;
         let posed = PosedSequence::new(
@@ -215,12 +218,7 @@ impl Pair {
                 }
                 None => surface.insert(PosedBody::new(&p, posed.faces())?),
             };
-            frames.push(collision_energy(
-                b,
-                xt,
-                weights.collision_eps,
-                weights.collision_radius,
-            )?);
+            frames.push(collision_energy(b, xt, eps, radius)?);
         }
         FrameEnergies::per_frame(frames)
     }
@@ -286,6 +284,7 @@ impl MultilevelTask {
             encodings: HashMap::new(),
             cache_encodings: false,
             surface: None,
+            collision_eps: training.weights.collision_eps,
         })
     }
 
@@ -476,7 +475,8 @@ impl TrainTask for MultilevelTask {
                         &self.body,
                         &mut self.surface,
                         &host,
-                        &self.training.weights,
+                        self.collision_eps,
+                        self.training.weights.collision_radius,
                     )?;
                     physics(e)?
                 }
@@ -513,6 +513,9 @@ impl TrainTask for MultilevelTask {
     fn enter_stage(&mut self, model: Multilevel, stage: &ScheduleState) -> Multilevel {
         // Step 2 trains the second (last) M^mp submodule only; the pair encoding is then
         // constant and cached.
+        self.collision_eps = stage
+            .phase
+            .collision_eps(&self.training.weights, &self.training.schedule);
         let frozen = stage.phase.is_frozen();
         self.cache_encodings = frozen;
         self.encodings.clear();
