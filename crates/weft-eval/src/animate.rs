@@ -166,9 +166,11 @@ pub struct AnimationCheck {
     pub inside: f64,
     /// The deepest of them, mm (0 when none is inside).
     pub deepest_mm: f64,
-    /// The frame with the largest share of its vertices inside the body, and that share
-    /// (where to look in the pictures; frame 0 with share 0 when none is inside).
-    pub worst_frame: (usize, f64),
+    /// The frame with the largest share of its vertices inside the body: where to look
+    /// in the pictures (0 when none is inside).
+    pub worst_frame: usize,
+    /// That frame's share.
+    pub worst_frame_inside: f64,
     /// Vertex positions that were not finite (left out of the figures above).
     pub nonfinite: usize,
 }
@@ -189,7 +191,7 @@ pub fn check_animation(
     let topology = crate::metrics::GarmentTopology::new(garment)?;
     let (mut strain_sum, mut strain_count, mut strain_max) = (0.0, 0usize, 0.0f64);
     let (mut inside, mut checked, mut deepest, mut nonfinite) = (0usize, 0usize, 0.0f64, 0);
-    let mut worst_frame = (0, 0.0f64);
+    let (mut worst_frame, mut worst_frame_inside) = (0, 0.0f64);
     // `posed` may run past the frames (a rollout that diverged): follow the body only
     // as far as they go.
     let mut body = MovingSurface::new(posed.faces());
@@ -218,8 +220,8 @@ pub fn check_animation(
         }
         inside += frame_inside;
         let share = frame_inside as f64 / finite.len().max(1) as f64;
-        if share > worst_frame.1 {
-            worst_frame = (t, share);
+        if share > worst_frame_inside {
+            (worst_frame, worst_frame_inside) = (t, share);
         }
     }
     Ok(AnimationCheck {
@@ -229,6 +231,7 @@ pub fn check_animation(
         inside: inside as f64 / checked.max(1) as f64,
         deepest_mm: 1e3 * deepest,
         worst_frame,
+        worst_frame_inside,
         nonfinite,
     })
 }
@@ -245,8 +248,12 @@ impl std::fmt::Display for AnimationCheck {
             self.deepest_mm
         )?;
         if self.inside > 0.0 {
-            let (t, share) = self.worst_frame;
-            write!(f, " (most in frame {t}: {:.2} %)", 100.0 * share)?;
+            write!(
+                f,
+                " (most in frame {}: {:.2} %)",
+                self.worst_frame,
+                100.0 * self.worst_frame_inside
+            )?;
         }
         if self.nonfinite > 0 {
             write!(f, "; {} non-finite vertex positions", self.nonfinite)?;
@@ -370,8 +377,8 @@ mod tests {
         let check = check_animation(&garment, &frames, &posed).unwrap();
         assert_eq!(check.frames, 3);
         assert!((check.inside - 3.0 / 9.0).abs() < 1e-12, "{}", check.inside);
-        assert_eq!(check.worst_frame.0, 1);
-        assert!((check.worst_frame.1 - 2.0 / 3.0).abs() < 1e-12);
+        assert_eq!(check.worst_frame, 1);
+        assert!((check.worst_frame_inside - 2.0 / 3.0).abs() < 1e-12);
         assert!(check.deepest_mm > 10.0, "{}", check.deepest_mm);
         assert!(check.to_string().contains("most in frame 1"), "{check}");
     }
