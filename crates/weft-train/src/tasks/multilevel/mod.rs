@@ -177,14 +177,14 @@ impl Pair {
     }
 
     /// Eq. 4's energies for the window `range` at the prediction `x` (`T·N`,
-    /// frame-major), threshold `eps`, contacts within `radius`. `surface` follows the posed body through the window: rebuilt on its
-    /// first frame (or built, on the run's first collision term), refit on the next ones
-    /// (a small motion between frames), and each frame's contacts are found against it
-    /// before it moves on. One surface for the whole run keeps the numbering of its
-    /// pseudo-normals' edges (a sort of every half-edge) out of the step, and no frame
-    /// needs a copy of it: with a surface built and copied per window frame, the term
-    /// took 28 ms of a 150 ms `cpu` step on the tiny dataset; with one moved surface,
-    /// 20 ms (bit-identical losses).
+    /// frame-major), threshold `eps`, contacts within `radius`. `surface` follows the
+    /// posed body through the window: rebuilt on its first frame (or built, on the run's
+    /// first collision term), refit on the next ones (a small motion between frames),
+    /// and each frame's contacts are found against it before it moves on. One surface
+    /// for the whole run keeps the numbering of its pseudo-normals' edges (a sort of
+    /// every half-edge) out of the step, and no frame needs a copy of it: with a surface
+    /// built and copied per window frame, the term took 28 ms of a 150 ms `cpu` step on
+    /// the tiny dataset; with one moved surface, 20 ms (bit-identical losses).
     fn collision(
         &self,
         range: Range<usize>,
@@ -511,11 +511,11 @@ impl TrainTask for MultilevelTask {
     }
 
     fn enter_stage(&mut self, model: Multilevel, stage: &ScheduleState) -> Multilevel {
-        // Step 2 trains the second (last) M^mp submodule only; the pair encoding is then
-        // constant and cached.
         self.collision_eps = stage
             .phase
             .collision_eps(&self.training.weights, &self.training.schedule);
+        // Step 2 trains the second (last) M^mp submodule only; the pair encoding is then
+        // constant and cached.
         let frozen = stage.phase.is_frozen();
         self.cache_encodings = frozen;
         self.encodings.clear();
