@@ -227,6 +227,10 @@ fn hood_trains_resumes_and_animates() {
         (vec!["--material", "denim,silk"], "needs --material-map"),
         (vec!["--buttons", s(&far)], "button pair 0"),
         (vec!["--strain-limit=-1"], "--strain-limit -1"),
+        (
+            vec!["--compression-limit", "100"],
+            "--compression-limit 100",
+        ),
     ] {
         let out = dir.join("bad.pc2");
         let o = anim(&extra, &out);

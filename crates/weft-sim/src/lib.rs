@@ -84,6 +84,6 @@ pub use sequence::{
 };
 pub use solver::{ClothSimulator, NewtonOptions, PreconditionerKind, SimOptions};
 pub use sparse::{BlockCsr, ElementGather, GatherCache, PatternBuilder};
-pub use strain_limit::{StrainLimit, StrainLimited};
+pub use strain_limit::{StrainBounds, StrainLimit, StrainLimited};
 pub use stretch::{Stretch, StretchParams};
 pub use swept::SweptBody;

@@ -1,14 +1,18 @@
 //! Strain limiting (Provot 1995, "Deformation constraints in a mass-spring model to
 //! describe rigid cloth behavior"): after a step, every mesh edge stretched beyond
-//! `(1 + limit)` times its rest length is shortened back to that length, its two ends
-//! moving in inverse proportion to their masses (a pinned end does not move), in
-//! Gauss–Seidel sweeps over the edges.
+//! `(1 + stretch)` times its rest length is shortened back to that length, and, when
+//! asked, every edge shorter than `(1 − compression)` rest lengths is lengthened to it,
+//! its two ends moving in inverse proportion to their masses (a pinned end does not
+//! move), in Gauss–Seidel sweeps over the edges.
 //!
 //! The implicit step bounds stretching through the potential's minimiser; a step that is
 //! not one (a learned step, HOOD's) can stretch cloth far beyond what its material
 //! allows, and an autoregressive rollout carries that stretch forward as sag. The limit
-//! bounds it after the fact. Compression is left alone: cloth buckles rather than
-//! shortens, and the bending energy, not a length, governs that.
+//! bounds it after the fact. A learned step also shortens edges, a vertex-to-vertex
+//! jitter of a few millimetres (docs/hood.md item 10) where cloth, which hardly
+//! shortens, would buckle out of its plane; the compression bound turns that into
+//! buckling as position-based cloth does, its edges held near their rest length both
+//! ways (Müller et al. 2007).
 
 use weft_mesh::vec3::{dist, sub};
 use weft_mesh::TriMesh;
@@ -23,16 +27,44 @@ pub struct StrainLimit {
     inverse_mass: Vec<f64>,
 }
 
+/// How far an edge may stretch and shorten, as fractions of its rest length (`None`:
+/// unbounded that way).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StrainBounds {
+    /// Longest: `(1 + stretch)` rest lengths (`>= 0`).
+    pub stretch: Option<f64>,
+    /// Shortest: `(1 − compression)` rest lengths (in `[0, 1)`).
+    pub compression: Option<f64>,
+}
+
+impl StrainBounds {
+    /// Stretch bounded, compression left alone (Provot's limit).
+    pub fn stretch(limit: f64) -> Self {
+        StrainBounds {
+            stretch: Some(limit),
+            compression: None,
+        }
+    }
+
+    /// Whether either way is bounded.
+    pub fn any(&self) -> bool {
+        self.stretch.is_some() || self.compression.is_some()
+    }
+}
+
 /// What one [`StrainLimit::apply`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StrainLimited {
-    /// Edges the first sweep found beyond the limit (each as it reached it).
-    pub edges_over: usize,
-    /// Sweeps that shortened an edge (the sweep after the last of them found none over
-    /// the limit and stopped the loop, unless the sweeps asked for ran out first).
+    /// Edges the first sweep found outside the bounds (each as it reached it).
+    pub edges_outside: usize,
+    /// Sweeps that corrected an edge (the sweep after the last of them found none
+    /// outside the bounds and stopped the loop, unless the sweeps asked for ran out
+    /// first).
     pub sweeps: usize,
     /// The largest `l / l₀ − 1` left after the last sweep.
     pub strain_max: f64,
+    /// The smallest `l / l₀ − 1` left after the last sweep.
+    pub strain_min: f64,
 }
 
 impl StrainLimit {
@@ -70,30 +102,51 @@ impl StrainLimit {
         })
     }
 
-    /// Shortens every edge of `x` longer than `(1 + limit)` rest lengths back to that
-    /// length, in at most `sweeps` Gauss–Seidel sweeps over the edges (in a fixed order,
-    /// so the result is deterministic). An edge shortened in one sweep can be stretched
+    /// Brings every edge of `x` longer than `(1 + stretch)` or shorter than
+    /// `(1 − compression)` rest lengths back to that length, in at most `sweeps`
+    /// Gauss–Seidel sweeps over the edges (in a fixed order, so the result is
+    /// deterministic). An edge corrected in one sweep can be pushed out of its bounds
     /// again by its neighbours' corrections in the same sweep; more sweeps converge.
     pub fn apply(
         &self,
         x: &mut [[f64; 3]],
-        limit: f64,
+        bounds: StrainBounds,
         sweeps: usize,
     ) -> Result<StrainLimited, SimError> {
         check_len("positions", self.inverse_mass.len(), x.len())?;
-        check_nonneg(|| "strain limit".into(), limit, false)?;
+        if let Some(limit) = bounds.stretch {
+            check_nonneg(|| "strain limit".into(), limit, false)?;
+        }
+        if let Some(limit) = bounds.compression {
+            if !(limit.is_finite() && (0.0..1.0).contains(&limit)) {
+                return Err(SimError::InvalidParameter {
+                    what: "compression limit".into(),
+                    value: limit,
+                    expected: "a fraction of the rest length in [0, 1)",
+                });
+            }
+        }
+        let longest = bounds.stretch.map_or(f64::INFINITY, |s| 1.0 + s);
+        let shortest = bounds.compression.map_or(0.0, |c| 1.0 - c);
         let mut report = StrainLimited::default();
         for sweep in 0..sweeps {
             let mut over = 0;
             for (&[a, b], &l0) in self.edges.iter().zip(&self.rest) {
                 let (a, b) = (a as usize, b as usize);
                 let (wa, wb) = (self.inverse_mass[a], self.inverse_mass[b]);
-                let target = (1.0 + limit) * l0;
                 let d = sub(x[b], x[a]);
                 let l = dist(x[a], x[b]);
-                // A relative tolerance, so that an edge left at the limit by rounding
-                // does not count as over it.
-                if l <= target * (1.0 + 1e-9) || wa + wb == 0.0 {
+                // A relative tolerance, so that an edge left at a bound by rounding does
+                // not count as outside it. An edge of length zero has no direction to
+                // lengthen along.
+                let target = if l > longest * l0 * (1.0 + 1e-9) {
+                    longest * l0
+                } else if l < shortest * l0 * (1.0 - 1e-9) && l > 0.0 {
+                    shortest * l0
+                } else {
+                    continue;
+                };
+                if wa + wb == 0.0 {
                     continue;
                 }
                 over += 1;
@@ -104,7 +157,7 @@ impl StrainLimit {
                 }
             }
             if sweep == 0 {
-                report.edges_over = over;
+                report.edges_outside = over;
             }
             if over == 0 {
                 break;
@@ -112,6 +165,7 @@ impl StrainLimit {
             report.sweeps = sweep + 1;
         }
         report.strain_max = self.strains(x).fold(f64::NEG_INFINITY, f64::max);
+        report.strain_min = self.strains(x).fold(f64::INFINITY, f64::min);
         Ok(report)
     }
 
@@ -146,8 +200,10 @@ mod tests {
         let before = limiter.strains(&x).collect::<Vec<_>>();
         assert!(before.iter().cloned().fold(0.0, f64::max) > 0.29);
         let pin = x[0];
-        let report = limiter.apply(&mut x, 0.05, 200).unwrap();
-        assert!(report.edges_over > 0, "{report:?}");
+        let report = limiter
+            .apply(&mut x, StrainBounds::stretch(0.05), 200)
+            .unwrap();
+        assert!(report.edges_outside > 0, "{report:?}");
         // Gauss–Seidel converges, slowly where the diagonals and the pin pull against
         // each other: within a tenth of a point of the limit.
         assert!(report.strain_max <= 0.051, "{report:?}");
@@ -171,8 +227,10 @@ mod tests {
             .map(|p| [1.03 * p[0], p[1], 0.8 * p[2]])
             .collect();
         let before = x.clone();
-        let report = limiter.apply(&mut x, 0.05, 10).unwrap();
-        assert_eq!(report.edges_over, 0);
+        let report = limiter
+            .apply(&mut x, StrainBounds::stretch(0.05), 10)
+            .unwrap();
+        assert_eq!(report.edges_outside, 0);
         assert_eq!(report.sweeps, 0);
         assert_eq!(x, before);
     }
@@ -192,8 +250,10 @@ mod tests {
             std::array::from_fn(|k| x.iter().zip(&masses).map(|(p, m)| m * p[k]).sum::<f64>())
         };
         let before = centre(&x);
-        let report = limiter.apply(&mut x, 0.1, 50).unwrap();
-        assert!(report.edges_over > 0);
+        let report = limiter
+            .apply(&mut x, StrainBounds::stretch(0.1), 50)
+            .unwrap();
+        assert!(report.edges_outside > 0);
         let after = centre(&x);
         for k in 0..3 {
             assert!(
@@ -215,9 +275,59 @@ mod tests {
         assert!(err.to_string().contains("mass of vertex 3"), "{err}");
         let limiter = StrainLimit::new(&rest, &vec![0.01; n], &vec![false; n]).unwrap();
         let mut x = rest.positions.clone();
-        let err = limiter.apply(&mut x, f64::NAN, 3).unwrap_err();
+        let err = limiter
+            .apply(&mut x, StrainBounds::stretch(f64::NAN), 3)
+            .unwrap_err();
         assert!(err.to_string().contains("strain limit"), "{err}");
-        let err = limiter.apply(&mut x[..n - 1], 0.1, 3).unwrap_err();
+        let err = limiter
+            .apply(&mut x[..n - 1], StrainBounds::stretch(0.1), 3)
+            .unwrap_err();
         assert!(err.to_string().contains("positions"), "{err}");
+        for bad in [1.0, -0.1, f64::NAN] {
+            let bounds = StrainBounds {
+                stretch: None,
+                compression: Some(bad),
+            };
+            let err = limiter.apply(&mut x, bounds, 3).unwrap_err();
+            assert!(err.to_string().contains("compression limit"), "{err}");
+        }
+    }
+
+    #[test]
+    fn a_sheet_compressed_between_pins_buckles_out_of_its_plane() {
+        // A strip pinned along both short sides, its pins 20 % nearer than at rest, with
+        // a millimetre of out-of-plane jitter: the stretch limit leaves it compressed;
+        // the compression bound lifts it out of the plane, as cloth buckles (into waves
+        // as short as the jitter: no bending energy here picks one arch).
+        let (nx, nz) = (9, 3);
+        let rest = grid(nx, nz, 0.05);
+        let n = rest.vertex_count();
+        let pinned: Vec<bool> = (0..n).map(|i| i % nx == 0 || i % nx == nx - 1).collect();
+        let limiter = StrainLimit::new(&rest, &vec![0.01; n], &pinned).unwrap();
+        let start: Vec<[f64; 3]> = rest
+            .positions
+            .iter()
+            .enumerate()
+            .map(|(i, p)| [0.8 * p[0], 1e-3 * (((i % nx) * 7 % 5) as f64 - 2.0), p[2]])
+            .collect();
+        let mut x = start.clone();
+        let stretch_only = limiter
+            .apply(&mut x, StrainBounds::stretch(0.05), 200)
+            .unwrap();
+        assert_eq!(stretch_only.edges_outside, 0, "{stretch_only:?}");
+        assert!(stretch_only.strain_min < -0.19, "{stretch_only:?}");
+        let bounds = StrainBounds {
+            stretch: Some(0.05),
+            compression: Some(0.05),
+        };
+        let report = limiter.apply(&mut x, bounds, 500).unwrap();
+        assert!(report.edges_outside > 0, "{report:?}");
+        assert!(report.strain_min >= -0.06, "{report:?}");
+        assert!(report.strain_max <= 0.06, "{report:?}");
+        for i in (0..n).filter(|&i| pinned[i]) {
+            assert_eq!(x[i], start[i], "pinned vertex {i} moved");
+        }
+        let rise = x.iter().map(|p| p[1].abs()).fold(0.0, f64::max);
+        assert!(rise > 0.01, "the strip rose {rise} m out of its plane");
     }
 }

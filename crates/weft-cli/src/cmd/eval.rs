@@ -55,6 +55,10 @@ pub struct EvalArgs {
     /// of the corrected rollouts, and the method is named with the corrections.
     #[arg(long, value_name = "PERCENT")]
     strain_limit: Option<f64>,
+    /// HOOD runs: lengthen edges shortened more than this many percent after every step
+    /// (`weft animate --compression-limit`).
+    #[arg(long, value_name = "PERCENT")]
+    compression_limit: Option<f64>,
     /// HOOD runs: after every step, move vertices inside the body or nearer than this
     /// many millimetres onto its surface at that distance (`weft animate --push-out`).
     #[arg(long, value_name = "MM")]
@@ -76,18 +80,19 @@ fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
     }
 }
 
-/// `--strain-limit` and `--push-out` by flag, as given.
-fn correction_flags(args: &EvalArgs) -> [(&'static str, Option<f64>); 2] {
+/// `--strain-limit`, `--compression-limit` and `--push-out` by flag, as given.
+fn correction_flags(args: &EvalArgs) -> [(&'static str, Option<f64>); 3] {
     [
         ("--strain-limit", args.strain_limit),
+        ("--compression-limit", args.compression_limit),
         ("--push-out", args.push_out),
     ]
 }
 
-/// The run-time corrections of `--strain-limit` and `--push-out`, refused unless one of
-/// the runs is a HOOD run (the only kind that takes them).
+/// The run-time corrections of `--strain-limit`, `--compression-limit` and `--push-out`,
+/// refused unless one of the runs is a HOOD run (the only kind that takes them).
 fn hood_options(args: &EvalArgs) -> Result<RolloutOptions> {
-    use super::hood_args::{push_out, strain_limit};
+    use super::hood_args::{push_out, strain_bounds};
     if let Some((flag, _)) = correction_flags(args).iter().find(|(_, v)| v.is_some()) {
         let hood = args.runs.iter().any(|r| {
             read_run_config(r).is_ok_and(|(h, _)| h.model == weft_models::ModelKind::Hood)
@@ -97,7 +102,7 @@ fn hood_options(args: &EvalArgs) -> Result<RolloutOptions> {
         }
     }
     Ok(RolloutOptions {
-        strain_limit: args.strain_limit.map(strain_limit).transpose()?,
+        strain_limit: strain_bounds(args.strain_limit, args.compression_limit)?,
         contact_margin: args.push_out.map(push_out).transpose()?,
         ..RolloutOptions::default()
     })

@@ -1,6 +1,7 @@
 //! `weft animate`'s choices for a HOOD run, which picks them at run time: what the
 //! garment is made of (one material, or a per-vertex map over a list of them), button
-//! vertex pairs, the frame at which they come undone, and run-time strain limiting.
+//! vertex pairs, the frame at which they come undone, and run-time strain limiting
+//! (stretch and compression).
 
 use std::path::PathBuf;
 
@@ -8,6 +9,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use weft_mesh::export::npy::{read_npy, NpyData};
 use weft_models::hood::{HoodPredictor, Materials};
+use weft_sim::StrainBounds;
 
 use super::cloth_args::{buttons, material};
 
@@ -30,6 +32,12 @@ pub struct HoodArgs {
     /// Off by default: the network's steps as they are.
     #[arg(long, value_name = "PERCENT")]
     strain_limit: Option<f64>,
+    /// HOOD: after every step, lengthen edges shortened more than this many percent
+    /// below their rest length, so that the cloth buckles out of its plane instead of
+    /// shrinking in it (with --strain-limit: both bounds, in the same sweeps). Off by
+    /// default.
+    #[arg(long, value_name = "PERCENT")]
+    compression_limit: Option<f64>,
 }
 
 impl HoodArgs {
@@ -41,6 +49,8 @@ impl HoodArgs {
             Some("--buttons")
         } else if self.strain_limit.is_some() {
             Some("--strain-limit")
+        } else if self.compression_limit.is_some() {
+            Some("--compression-limit")
         } else {
             None
         }
@@ -75,17 +85,27 @@ impl HoodArgs {
             hood.buttons = buttons(path)?;
         }
         hood.options.unbutton_at = self.unbutton_at;
-        hood.options.strain_limit = self.strain_limit.map(strain_limit).transpose()?;
+        hood.options.strain_limit = strain_bounds(self.strain_limit, self.compression_limit)?;
         Ok(())
     }
 }
 
-/// `--strain-limit PERCENT` (`weft animate`, `weft eval`) as a fraction.
-pub(super) fn strain_limit(percent: f64) -> Result<f64> {
-    if !(percent.is_finite() && percent >= 0.0) {
-        bail!("--strain-limit {percent}: expected a percentage >= 0");
+/// `--strain-limit PERCENT` and `--compression-limit PERCENT` (`weft animate`, `weft
+/// eval`) as fractions of the rest length.
+pub(super) fn strain_bounds(
+    stretch: Option<f64>,
+    compression: Option<f64>,
+) -> Result<StrainBounds> {
+    if let Some(p) = stretch.filter(|p| !(p.is_finite() && *p >= 0.0)) {
+        bail!("--strain-limit {p}: expected a percentage >= 0");
     }
-    Ok(percent / 100.0)
+    if let Some(p) = compression.filter(|p| !(p.is_finite() && (0.0..100.0).contains(p))) {
+        bail!("--compression-limit {p}: expected a percentage >= 0 and below 100");
+    }
+    Ok(StrainBounds {
+        stretch: stretch.map(|p| p / 100.0),
+        compression: compression.map(|p| p / 100.0),
+    })
 }
 
 /// `--push-out MM` (`weft animate` for every model, `weft eval` for HOOD) in metres.

@@ -138,8 +138,11 @@ impl Deformer for HoodPredictor {
         // The flags' own units, rounded so that 0.07 reads 7, not 7.000000000000001.
         let shown = |x: f64| (x * 1e6).round() / 1e6;
         let mut on = Vec::new();
-        if let Some(limit) = o.strain_limit {
+        if let Some(limit) = o.strain_limit.stretch {
             on.push(format!("strain limit {} %", shown(100.0 * limit)));
+        }
+        if let Some(limit) = o.strain_limit.compression {
+            on.push(format!("compression limit {} %", shown(100.0 * limit)));
         }
         if let Some(margin) = o.contact_margin {
             on.push(format!("push-out {} mm", shown(1000.0 * margin)));
@@ -284,8 +287,13 @@ mod tests {
     fn the_name_says_which_corrections_are_on() {
         let mut p = predictor();
         assert_eq!(p.name(), "HOOD");
-        p.options.strain_limit = Some(7.0 / 100.0);
+        p.options.strain_limit.stretch = Some(7.0 / 100.0);
         p.options.contact_margin = Some(2.5 / 1000.0);
         assert_eq!(p.name(), "HOOD (strain limit 7 %, push-out 2.5 mm)");
+        p.options.strain_limit.compression = Some(3.0 / 100.0);
+        assert_eq!(
+            p.name(),
+            "HOOD (strain limit 7 %, compression limit 3 %, push-out 2.5 mm)"
+        );
     }
 }

@@ -6,7 +6,7 @@
 
 use burn::tensor::{Device, Tensor, TensorData};
 use weft_garment::onbody::push_out;
-use weft_sim::{project_contacts, StrainLimit};
+use weft_sim::{project_contacts, StrainBounds, StrainLimit};
 
 use super::config::HoodConfig;
 use super::features::GarmentStep;
@@ -95,10 +95,11 @@ pub struct RolloutOptions {
     /// A step that moves a vertex faster than this (m/s), or to a non-finite position,
     /// stops that rollout: the finished frames are kept.
     pub max_speed: f64,
-    /// Run-time strain limiting: after every step, edges longer than `1 +` this many
-    /// rest lengths are shortened to it ([`StrainLimit`], [`STRAIN_LIMIT_SWEEPS`]
-    /// sweeps). `None`: the network's step as it is (HOOD).
-    pub strain_limit: Option<f64>,
+    /// Run-time strain limiting: after every step, edges longer than `1 + stretch` rest
+    /// lengths are shortened to it, and edges shorter than `1 − compression` lengthened
+    /// to it ([`StrainLimit`], [`STRAIN_LIMIT_SWEEPS`] sweeps). Unbounded both ways
+    /// (the default): the network's step as it is (HOOD).
+    pub strain_limit: StrainBounds,
     /// Run-time contact projection: after every step (and after the strain limit),
     /// vertices nearer than this (m) to the collision term's contact planes, or behind
     /// them, move onto them at this distance ([`project_contacts`], with the friction
@@ -113,7 +114,7 @@ impl Default for RolloutOptions {
         RolloutOptions {
             unbutton_at: None,
             max_speed: 50.0,
-            strain_limit: None,
+            strain_limit: StrainBounds::default(),
             contact_margin: None,
         }
     }
@@ -139,8 +140,8 @@ pub const ROUND_SWEEPS: usize = 10;
 /// What the run-time corrections of a rollout did, summed over its steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Corrections {
-    /// Edges over [`RolloutOptions::strain_limit`] after the network's step, before
-    /// they were shortened (not counted again in [`CONTACT_ROUNDS`]).
+    /// Edges outside [`RolloutOptions::strain_limit`] after the network's step, before
+    /// they were corrected (not counted again in [`CONTACT_ROUNDS`]).
     pub edges_limited: usize,
     /// Vertex positions moved onto a contact plane or out of the body by
     /// [`RolloutOptions::contact_margin`] (the first projection and the push-out; not
@@ -232,12 +233,12 @@ fn correct(
     let failed = |what: &str, e: weft_sim::SimError| {
         ModelError::Garment(format!("{what} of frame {}: {e}", at.t + 1))
     };
-    let limit = |x: &mut [[f64; 3]], sweeps: usize| match (options.strain_limit, limiter) {
-        (Some(limit), Some(limiter)) => limiter
-            .apply(x, limit, sweeps)
-            .map(|report| report.edges_over)
+    let limit = |x: &mut [[f64; 3]], sweeps: usize| match limiter {
+        Some(limiter) => limiter
+            .apply(x, options.strain_limit, sweeps)
+            .map(|report| report.edges_outside)
             .map_err(|e| failed("the strain limit", e)),
-        _ => Ok(0),
+        None => Ok(0),
     };
     done.edges_limited = limit(next, STRAIN_LIMIT_SWEEPS)?;
     if let Some(margin) = options.contact_margin {
@@ -339,8 +340,8 @@ pub fn roll_out(
             corrections: Corrections::default(),
         })
         .collect();
-    let limiters = match options.strain_limit {
-        Some(_) => scenes
+    let limiters = match options.strain_limit.any() {
+        true => scenes
             .iter()
             .map(|s| {
                 let g = &s.garment;
@@ -348,7 +349,7 @@ pub fn roll_out(
             })
             .collect::<Result<Vec<_>, _>>()
             .map_err(|e| ModelError::Garment(format!("the strain limit: {e}")))?,
-        None => vec![None; scenes.len()],
+        false => vec![None; scenes.len()],
     };
     // Scene k's step from frame t, for its graph and for its corrections alike.
     let step_at = |k: usize, t: usize| StepAt {
@@ -504,7 +505,7 @@ mod tests {
                 .remove(0)
         };
         let edges = skirt.edges();
-        let max_strain = |x: &[[f64; 3]]| {
+        let strains = |x: &[[f64; 3]]| -> Vec<f64> {
             edges
                 .iter()
                 .map(|&[a, b]| {
@@ -513,8 +514,10 @@ mod tests {
                         / weft_mesh::vec3::dist(skirt.positions[a], skirt.positions[b])
                         - 1.0
                 })
-                .fold(f64::NEG_INFINITY, f64::max)
+                .collect()
         };
+        let max_strain = |x: &[[f64; 3]]| strains(x).into_iter().fold(f64::NEG_INFINITY, f64::max);
+        let min_strain = |x: &[[f64; 3]]| strains(x).into_iter().fold(f64::INFINITY, f64::min);
         let surface = PosedBody::new(&scene.body[5], &scene.faces).unwrap();
         let inside = |x: &[[f64; 3]]| {
             let d = surface.signed_distances(x).unwrap();
@@ -534,12 +537,30 @@ mod tests {
         assert!(inside(&last(&plain)) > 10, "{}", inside(&last(&plain)));
 
         let limited = run(RolloutOptions {
-            strain_limit: Some(0.1),
+            strain_limit: StrainBounds::stretch(0.1),
             ..Default::default()
         });
         assert!(limited.corrections.edges_limited > 0);
         for x in &limited.frames[1..] {
             assert!(max_strain(x) < 0.15, "{}", max_strain(x));
+        }
+
+        // Bounded both ways, the edges the fall shortens are lengthened back as well.
+        assert!(
+            min_strain(&last(&limited)) < -0.15,
+            "{}",
+            min_strain(&last(&limited))
+        );
+        let both_ways = run(RolloutOptions {
+            strain_limit: StrainBounds {
+                stretch: Some(0.1),
+                compression: Some(0.1),
+            },
+            ..Default::default()
+        });
+        for x in &both_ways.frames[1..] {
+            assert!(max_strain(x) < 0.15, "{}", max_strain(x));
+            assert!(min_strain(x) > -0.15, "{}", min_strain(x));
         }
 
         let projected = run(RolloutOptions {
@@ -559,7 +580,7 @@ mod tests {
         // each (no rounds) left an edge 0.198 over its rest length, the rounds 0.162;
         // the push-out after them is what stretches beyond 0.1.
         let both = run(RolloutOptions {
-            strain_limit: Some(0.1),
+            strain_limit: StrainBounds::stretch(0.1),
             contact_margin: Some(0.002),
             ..Default::default()
         });
