@@ -219,8 +219,8 @@ fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Opt
 /// (found from `cur`, on the swept body when the run uses swept contacts, so a limb
 /// that passed through the cloth in the step pushes it back to its side, and the
 /// material's friction carries it on with the limb), with both
-/// given [`CONTACT_ROUNDS`] rounds of the two, then the push-out of what is still
-/// inside. The rollout goes on from the corrected positions.
+/// given [`CONTACT_ROUNDS`] rounds of the two and a last limit, then the push-out of
+/// what is still inside. The rollout goes on from the corrected positions.
 fn correct(
     scene: &Scene,
     limiter: Option<&StrainLimit>,
@@ -257,6 +257,10 @@ fn correct(
                 limit(next, ROUND_SWEEPS)?;
                 project(next)?;
             }
+            // The limit has the last word before the push-out: ending the rounds on
+            // the projection left a hem vertex that rested on a foot held to it by its
+            // grip, 3.5 rest lengths from its neighbours (docs/hood.md item 12).
+            limit(next, ROUND_SWEEPS)?;
         }
         // What no plane reached (a vertex farther than the contact radius at t that the
         // step or the strain limit moved into the body): the closest surface point at
@@ -577,15 +581,16 @@ mod tests {
 
         // Both: the projection's moves are handed on to the neighbours (the rounds),
         // so the edges stay near the limit with the skirt out of the body. One pass of
-        // each (no rounds) left an edge 0.198 over its rest length, the rounds 0.162;
-        // the push-out after them is what stretches beyond 0.1.
+        // each (no rounds) left an edge 0.198 over its rest length, the rounds 0.162,
+        // the rounds and a last limit 0.151; the push-out after them is what stretches
+        // beyond 0.1.
         let both = run(RolloutOptions {
             strain_limit: StrainBounds::stretch(0.1),
             contact_margin: Some(0.002),
             ..Default::default()
         });
         for x in &both.frames[1..] {
-            assert!(max_strain(x) < 0.18, "{}", max_strain(x));
+            assert!(max_strain(x) < 0.16, "{}", max_strain(x));
         }
         assert!(inside(&last(&both)) * 10 < inside(&last(&plain)));
     }
