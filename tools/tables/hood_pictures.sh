@@ -3,7 +3,7 @@
 # default body walking, frames 0, 10, 20, 30 and 39, each over its posed body (top row
 # simulated, then HOOD), with each row's mean edge strain over all frames printed.
 # With OPTIONS (extra `weft animate` flags, e.g. '--strain-limit 10 --push-out 2'), a
-# third row rolls the same run out with them.
+# third row rolls the same run out with them; sets separated by ';' add a row each.
 #
 #   tools/tables/hood_pictures.sh RUN OUT.png [GARMENT.obj]
 #
@@ -27,12 +27,13 @@ fi
     --obj --out "$tmp/sim" >/dev/null
 "$weft" animate "$run" --garment "$garment" --motion "$tmp/motion.npz" --material "$material" \
     --format obj --out "$tmp/hood" >/dev/null || echo "HOOD's rollout stopped early (see above)" >&2
-if [[ -n "$options" ]]; then
-    # shellcheck disable=SC2086 # OPTIONS is a list of flags
+IFS=';' read -ra option_sets <<<"$options"
+for i in "${!option_sets[@]}"; do
+    # shellcheck disable=SC2086 # each set is a list of flags
     "$weft" animate "$run" --garment "$garment" --motion "$tmp/motion.npz" --material "$material" \
-        --format obj --out "$tmp/corrected" $options >/dev/null ||
-        echo "HOOD's rollout with $options stopped early (see above)" >&2
-fi
+        --format obj --out "$tmp/corrected$i" ${option_sets[$i]} >/dev/null ||
+        echo "HOOD's rollout with ${option_sets[$i]} stopped early (see above)" >&2
+done
 row() {
     local dir=$1 title=$2 name=$3
     local files=($(ls "$dir"/*.obj | sort))
@@ -48,13 +49,17 @@ top=$(row "$tmp/sim/obj" simulated sim)
 bottom=$(row "$tmp/hood" HOOD hood)
 rows=("$top" "$bottom")
 dirs=("$tmp/sim/obj" "$tmp/hood")
-if [[ -n "$options" ]]; then
-    rows+=("$(row "$tmp/corrected" "HOOD $options" corrected)")
-    dirs+=("$tmp/corrected")
-fi
-python3 - "$out" "$garment" "${dirs[@]}" <<PY
+names=(simulated HOOD)
+for i in "${!option_sets[@]}"; do
+    set_name=$(echo ${option_sets[$i]})
+    rows+=("$(row "$tmp/corrected$i" "HOOD $set_name" "corrected$i")")
+    dirs+=("$tmp/corrected$i")
+    names+=("HOOD $set_name")
+done
+python3 - "$out" "$garment" "${#dirs[@]}" "${dirs[@]}" "${names[@]}" <<PY
 import math, os, sys
-out, garment = sys.argv[1:3]
+out, garment, count = sys.argv[1], sys.argv[2], int(sys.argv[3])
+dirs, names = sys.argv[4:4 + count], sys.argv[4 + count:]
 def load(p):
     v, f = [], []
     for l in open(p):
@@ -64,7 +69,7 @@ def load(p):
     return v, f
 rest, faces = load(garment)
 edges = {tuple(sorted(e)) for f in faces for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
-for name, d in zip(("simulated", "HOOD", "HOOD with the options"), sys.argv[3:]):
+for name, d in zip(names, dirs):
     s = []
     for p in sorted(os.listdir(d)):
         v, _ = load(os.path.join(d, p))

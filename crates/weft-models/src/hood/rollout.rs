@@ -214,69 +214,102 @@ fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Opt
     })
 }
 
-/// `options`' run-time corrections of the step `at` from `cur` to `next`: the strain
-/// limit, then the contact projection against the planes the collision term uses
-/// (found from `cur`, on the swept body when the run uses swept contacts, so a limb
-/// that passed through the cloth in the step pushes it back to its side, and the
-/// material's friction carries it on with the limb), with both
-/// given [`CONTACT_ROUNDS`] rounds of the two and a last limit, then the push-out of
-/// what is still inside. The rollout goes on from the corrected positions.
-fn correct(
-    scene: &Scene,
-    limiter: Option<&StrainLimit>,
-    options: &RolloutOptions,
-    cur: &[[f64; 3]],
-    at: StepAt,
-    next: &mut [[f64; 3]],
-) -> Result<Corrections, ModelError> {
-    let mut done = Corrections::default();
-    let failed = |what: &str, e: weft_sim::SimError| {
-        ModelError::Garment(format!("{what} of frame {}: {e}", at.t + 1))
-    };
-    let limit = |x: &mut [[f64; 3]], sweeps: usize| match limiter {
-        Some(limiter) => limiter
-            .apply(x, options.strain_limit, sweeps)
-            .map(|report| report.edges_outside)
-            .map_err(|e| failed("the strain limit", e)),
-        None => Ok(0),
-    };
-    done.edges_limited = limit(next, STRAIN_LIMIT_SWEEPS)?;
-    if let Some(margin) = options.contact_margin {
-        let (body, end) = scene.contact_and_posed_body(at)?;
-        let contacts = scene
-            .cloth_at(at)
-            .contacts(cur, &scene.garment.pinned, Some(body.as_ref()))
-            .map_err(|e| failed("the contacts", e))?;
-        let project = |x: &mut [[f64; 3]]| {
-            project_contacts(x, &contacts.collision, &contacts.grips, margin)
-                .map_err(|e| failed("the contact projection", e))
+/// `options`' run-time corrections of one scene's steps (its strain limiter built once),
+/// for rollouts and for the training rollouts that replay what a corrected rollout
+/// sees.
+pub struct Corrector<'a> {
+    scene: &'a Scene,
+    limiter: Option<StrainLimit>,
+    options: RolloutOptions,
+}
+
+impl<'a> Corrector<'a> {
+    /// The corrections `options` asks for on `scene`'s garment.
+    pub fn new(scene: &'a Scene, options: &RolloutOptions) -> Result<Self, ModelError> {
+        let g = &scene.garment;
+        let limiter = match options.strain_limit.any() {
+            true => Some(
+                StrainLimit::new(&g.rest, &g.masses, &g.pinned)
+                    .map_err(|e| ModelError::Garment(format!("the strain limit: {e}")))?,
+            ),
+            false => None,
         };
-        done.vertices_projected = project(next)?;
-        if limiter.is_some() {
-            for _ in 0..CONTACT_ROUNDS {
-                limit(next, ROUND_SWEEPS)?;
-                project(next)?;
-            }
-            // The limit has the last word before the push-out: ending the rounds on
-            // the projection left a hem vertex that rested on a foot held to it by its
-            // grip, 3.5 rest lengths from its neighbours (docs/hood.md item 12).
-            limit(next, ROUND_SWEEPS)?;
-        }
-        // What no plane reached (a vertex farther than the contact radius at t that the
-        // step or the strain limit moved into the body): the closest surface point at
-        // t + 1. Pinned vertices keep their targets.
-        let free: Vec<usize> = (0..next.len())
-            .filter(|&i| !scene.garment.pinned[i])
-            .collect();
-        let mut points: Vec<[f64; 3]> = free.iter().map(|&i| next[i]).collect();
-        done.vertices_projected += push_out(end.surface(), &mut points, margin).map_err(|e| {
-            ModelError::Garment(format!("pushing frame {} out of the body: {e}", at.t + 1))
-        })?;
-        for (&i, p) in free.iter().zip(points) {
-            next[i] = p;
-        }
+        Ok(Corrector {
+            scene,
+            limiter,
+            options: *options,
+        })
     }
-    Ok(done)
+
+    /// Whether any correction is on.
+    pub fn active(&self) -> bool {
+        self.limiter.is_some() || self.options.contact_margin.is_some()
+    }
+
+    /// The corrections of the step `at` from `cur` to `next`: the strain limit, then
+    /// the contact projection against the planes the collision term uses (found from
+    /// `cur`, on the swept body when the run uses swept contacts, so a limb that passed
+    /// through the cloth in the step pushes it back to its side, and the material's
+    /// friction carries it on with the limb), with both given [`CONTACT_ROUNDS`] rounds
+    /// of the two and a last limit, then the push-out of what is still inside. The
+    /// rollout goes on from the corrected positions.
+    pub fn correct(
+        &self,
+        cur: &[[f64; 3]],
+        at: StepAt,
+        next: &mut [[f64; 3]],
+    ) -> Result<Corrections, ModelError> {
+        let (scene, options) = (self.scene, &self.options);
+        let mut done = Corrections::default();
+        let failed = |what: &str, e: weft_sim::SimError| {
+            ModelError::Garment(format!("{what} of frame {}: {e}", at.t + 1))
+        };
+        let limit = |x: &mut [[f64; 3]], sweeps: usize| match &self.limiter {
+            Some(limiter) => limiter
+                .apply(x, options.strain_limit, sweeps)
+                .map(|report| report.edges_outside)
+                .map_err(|e| failed("the strain limit", e)),
+            None => Ok(0),
+        };
+        done.edges_limited = limit(next, STRAIN_LIMIT_SWEEPS)?;
+        if let Some(margin) = options.contact_margin {
+            let (body, end) = scene.contact_and_posed_body(at)?;
+            let contacts = scene
+                .cloth_at(at)
+                .contacts(cur, &scene.garment.pinned, Some(body.as_ref()))
+                .map_err(|e| failed("the contacts", e))?;
+            let project = |x: &mut [[f64; 3]]| {
+                project_contacts(x, &contacts.collision, &contacts.grips, margin)
+                    .map_err(|e| failed("the contact projection", e))
+            };
+            done.vertices_projected = project(next)?;
+            if self.limiter.is_some() {
+                for _ in 0..CONTACT_ROUNDS {
+                    limit(next, ROUND_SWEEPS)?;
+                    project(next)?;
+                }
+                // The limit has the last word before the push-out: ending the rounds on
+                // the projection left a hem vertex that rested on a foot held to it by
+                // its grip, 3.5 rest lengths from its neighbours (docs/hood.md item 12).
+                limit(next, ROUND_SWEEPS)?;
+            }
+            // What no plane reached (a vertex farther than the contact radius at t that
+            // the step or the strain limit moved into the body): the closest surface
+            // point at t + 1. Pinned vertices keep their targets.
+            let free: Vec<usize> = (0..next.len())
+                .filter(|&i| !scene.garment.pinned[i])
+                .collect();
+            let mut points: Vec<[f64; 3]> = free.iter().map(|&i| next[i]).collect();
+            done.vertices_projected +=
+                push_out(end.surface(), &mut points, margin).map_err(|e| {
+                    ModelError::Garment(format!("pushing frame {} out of the body: {e}", at.t + 1))
+                })?;
+            for (&i, p) in free.iter().zip(points) {
+                next[i] = p;
+            }
+        }
+        Ok(done)
+    }
 }
 
 /// HOOD rolled out over every frame of each scene, the scenes advanced together (one
@@ -344,17 +377,10 @@ pub fn roll_out(
             corrections: Corrections::default(),
         })
         .collect();
-    let limiters = match options.strain_limit.any() {
-        true => scenes
-            .iter()
-            .map(|s| {
-                let g = &s.garment;
-                StrainLimit::new(&g.rest, &g.masses, &g.pinned).map(Some)
-            })
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|e| ModelError::Garment(format!("the strain limit: {e}")))?,
-        false => vec![None; scenes.len()],
-    };
+    let correctors = scenes
+        .iter()
+        .map(|s| Corrector::new(s, options))
+        .collect::<Result<Vec<_>, _>>()?;
     // Scene k's step from frame t, for its graph and for its corrections alike.
     let step_at = |k: usize, t: usize| StepAt {
         t,
@@ -383,14 +409,7 @@ pub fn roll_out(
             match diverged(&out[k].frames[t], &x, scenes[k].dt, options.max_speed) {
                 Some(why) => out[k].stopped = Some((t + 1, why)),
                 None => {
-                    let done = correct(
-                        scenes[k],
-                        limiters[k].as_ref(),
-                        options,
-                        &out[k].frames[t],
-                        step_at(k, t),
-                        &mut x,
-                    )?;
+                    let done = correctors[k].correct(&out[k].frames[t], step_at(k, t), &mut x)?;
                     out[k].corrections.edges_limited += done.edges_limited;
                     out[k].corrections.vertices_projected += done.vertices_projected;
                     out[k].frames.push(x);
