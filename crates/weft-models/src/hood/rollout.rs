@@ -214,10 +214,8 @@ fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Opt
     })
 }
 
-/// `options`' run-time corrections of one scene's steps (its strain limiter built once),
-/// for rollouts and for the training rollouts that replay what a corrected rollout
-/// sees.
-pub struct Corrector<'a> {
+/// `options`' run-time corrections of one scene's steps (its strain limiter built once).
+struct Corrector<'a> {
     scene: &'a Scene,
     limiter: Option<StrainLimit>,
     options: RolloutOptions,
@@ -225,7 +223,7 @@ pub struct Corrector<'a> {
 
 impl<'a> Corrector<'a> {
     /// The corrections `options` asks for on `scene`'s garment.
-    pub fn new(scene: &'a Scene, options: &RolloutOptions) -> Result<Self, ModelError> {
+    fn new(scene: &'a Scene, options: &RolloutOptions) -> Result<Self, ModelError> {
         let g = &scene.garment;
         let limiter = match options.strain_limit.any() {
             true => Some(
@@ -241,11 +239,6 @@ impl<'a> Corrector<'a> {
         })
     }
 
-    /// Whether any correction is on.
-    pub fn active(&self) -> bool {
-        self.limiter.is_some() || self.options.contact_margin.is_some()
-    }
-
     /// The corrections of the step `at` from `cur` to `next`: the strain limit, then
     /// the contact projection against the planes the collision term uses (found from
     /// `cur`, on the swept body when the run uses swept contacts, so a limb that passed
@@ -253,7 +246,7 @@ impl<'a> Corrector<'a> {
     /// friction carries it on with the limb), with both given [`CONTACT_ROUNDS`] rounds
     /// of the two and a last limit, then the push-out of what is still inside. The
     /// rollout goes on from the corrected positions.
-    pub fn correct(
+    fn correct(
         &self,
         cur: &[[f64; 3]],
         at: StepAt,
