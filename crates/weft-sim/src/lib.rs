@@ -35,6 +35,7 @@ pub mod contact;
 pub mod elastic_skin;
 pub mod energy;
 pub mod error;
+pub mod face_contact;
 pub mod friction;
 pub mod gravity;
 pub mod hood_material;
@@ -67,6 +68,7 @@ pub use contact::{
 pub use elastic_skin::{ConeVolume, ElasticSkin, ElasticSkinParams, ElasticSkinReport};
 pub use energy::{gradient_of, hessian_of, hessian_pattern_of, Energy, HessianKind};
 pub use error::SimError;
+pub use face_contact::FaceContact;
 pub use friction::{Friction, FrictionContact};
 pub use gravity::{lumped_masses, Gravity, STANDARD_GRAVITY};
 pub use hood_material::{

@@ -6,7 +6,7 @@
 
 use burn::tensor::{Device, Tensor, TensorData};
 use weft_garment::onbody::push_out;
-use weft_sim::{project_contacts, StrainBounds, StrainLimit};
+use weft_sim::{project_contacts, FaceContact, StrainBounds, StrainLimit};
 
 use super::config::HoodConfig;
 use super::features::GarmentStep;
@@ -218,6 +218,7 @@ fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Opt
 struct Corrector<'a> {
     scene: &'a Scene,
     limiter: Option<StrainLimit>,
+    faces: Option<FaceContact>,
     options: RolloutOptions,
 }
 
@@ -232,9 +233,17 @@ impl<'a> Corrector<'a> {
             ),
             false => None,
         };
+        let faces = match options.contact_margin {
+            Some(_) => Some(
+                FaceContact::new(&g.rest, &g.pinned)
+                    .map_err(|e| ModelError::Garment(format!("the face contacts: {e}")))?,
+            ),
+            None => None,
+        };
         Ok(Corrector {
             scene,
             limiter,
+            faces,
             options: *options,
         })
     }
@@ -286,9 +295,18 @@ impl<'a> Corrector<'a> {
                 // its grip, 3.5 rest lengths from its neighbours (docs/hood.md item 12).
                 limit(next, ROUND_SWEEPS)?;
             }
+            // What came through the cloth between its vertices (a knee through a
+            // triangle whose corners are all outside): its faces pushed off the body,
+            // before the push-out, which moves out any corner they pushed into another
+            // part of the body (a thigh into the other in a crouch).
+            if let Some(faces) = &self.faces {
+                done.vertices_projected += faces
+                    .apply(next, end.surface(), margin)
+                    .map_err(|e| failed("the face contacts", e))?;
+            }
             // What no plane reached (a vertex farther than the contact radius at t that
-            // the step or the strain limit moved into the body): the closest surface
-            // point at t + 1. Pinned vertices keep their targets.
+            // the step, the strain limit or the faces moved into the body): the closest
+            // surface point at t + 1. Pinned vertices keep their targets.
             let free: Vec<usize> = (0..next.len())
                 .filter(|&i| !scene.garment.pinned[i])
                 .collect();
