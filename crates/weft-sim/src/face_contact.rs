@@ -9,9 +9,10 @@
 //! lies inside a face or on an interior edge, on a face roughly parallel to the skin
 //! there and turned the way most such faces turn, and less than a margin out along the
 //! body's normal, pushes that face's
-//! corners out along the normal, weighted by its barycentric coordinates as a
-//! position-based point–triangle constraint with an immovable point (Müller et al.
-//! 2007); of several pushes on one garment vertex the largest is taken.
+//! corners out along the normal, weighted by its barycentric coordinates, so that the
+//! body vertex ends under the cloth (a point–triangle constraint with an immovable
+//! point, as position-based dynamics takes them, Müller et al. 2007, bounded by the
+//! depth); of several pushes on one garment vertex the largest is taken.
 
 use rayon::prelude::*;
 use weft_body::query::{BodySurface, SurfaceFeature};
@@ -41,11 +42,14 @@ pub struct FaceContact {
     faces: Vec<[u32; 3]>,
     boundary: Vec<bool>,
     movable: Vec<bool>,
+    skipped: Vec<bool>,
 }
 
 impl FaceContact {
-    /// The faces of `garment` (its rest mesh) with `pinned` vertices kept in place.
-    pub fn new(garment: &TriMesh, pinned: &[bool]) -> Result<Self, SimError> {
+    /// The faces of `garment` (its rest mesh) with `pinned` vertices kept in place;
+    /// body vertices flagged in `skipped` (the hands, whose fingers hang against a
+    /// skirt's sides from the first frame, or none if empty) push no faces.
+    pub fn new(garment: &TriMesh, pinned: &[bool], skipped: &[bool]) -> Result<Self, SimError> {
         let n = garment.vertex_count();
         check_len("pinned flags", n, pinned.len())?;
         let topology = Topology::new(garment);
@@ -59,38 +63,77 @@ impl FaceContact {
             faces: garment.faces.clone(),
             boundary,
             movable: pinned.iter().map(|&p| !p).collect(),
+            skipped: skipped.to_vec(),
         })
     }
 
     /// Pushes the faces of the garment at `x` off every vertex of `body` that came
-    /// through them, to `margin` (m) out along the body's normal, in
-    /// [`FACE_CONTACT_PASSES`] passes; returns how many garment vertices moved.
+    /// through them in the step from `start` (the garment and the body at its
+    /// beginning), to `margin` (m) out along the body's normal, in
+    /// [`FACE_CONTACT_PASSES`] passes; returns how many garment vertices moved. A body
+    /// vertex that was already on the cloth's outer side at the start (the back of a
+    /// hand held in front of a skirt, thinner than the reach) is not one that came
+    /// through.
     pub fn apply(
         &self,
+        start: (&[[f64; 3]], &BodySurface),
         x: &mut [[f64; 3]],
         body: &BodySurface,
         margin: f64,
     ) -> Result<usize, SimError> {
         check_len("positions", self.movable.len(), x.len())?;
+        check_len("positions at the start", self.movable.len(), start.0.len())?;
+        check_len(
+            "body vertices at the start",
+            body.positions().len(),
+            start.1.positions().len(),
+        )?;
         check_nonneg(|| "face contact margin".into(), margin, true)?;
-        let normals = body.vertex_normals();
+        if !self.skipped.is_empty() {
+            check_len(
+                "skipped body flags",
+                body.positions().len(),
+                self.skipped.len(),
+            )?;
+        }
+        let finds =
+            |cloth: &[[f64; 3]], body: &BodySurface| -> Result<Vec<Option<Push>>, SimError> {
+                let cloth = BodySurface::new(cloth, &self.faces)?;
+                let normals = body.vertex_normals();
+                Ok(body
+                    .positions()
+                    .par_iter()
+                    .zip(&normals)
+                    .enumerate()
+                    .map(|(j, (&p, &n))| match self.skipped.get(j) {
+                        Some(true) => None,
+                        _ => self.push(&cloth, p, n, margin),
+                    })
+                    .collect())
+            };
+        let before = finds(start.0, start.1)?;
         let mut moved = vec![false; x.len()];
         for _ in 0..FACE_CONTACT_PASSES {
-            let cloth = BodySurface::new(x, &self.faces)?;
-            let found: Vec<Push> = body
-                .positions()
-                .par_iter()
-                .zip(&normals)
-                .filter_map(|(&p, &n)| self.push(&cloth, p, n, margin))
-                .collect();
+            let found = finds(x, body)?;
             // Which way the garment's faces turn: the way most faces over the skin
             // turn (a mesh may be wound either way). A face turned the other way is
             // the far side of a thin limb or the underside of a fold, not cloth the
             // body came through.
-            let outward: i64 = found.iter().map(|p| if p.facing { 1 } else { -1 }).sum();
+            let outward = found
+                .iter()
+                .flatten()
+                .map(|p| if p.facing { 1i64 } else { -1 })
+                .sum::<i64>()
+                >= 0;
+            let outside_before = |b: &Option<Push>| {
+                b.as_ref()
+                    .is_some_and(|b| b.facing == outward && b.depth > margin)
+            };
             let pushes: Vec<&Push> = found
                 .iter()
-                .filter(|p| p.depth > 0.0 && p.facing == (outward >= 0))
+                .zip(&before)
+                .filter_map(|(p, b)| p.as_ref().filter(|_| !outside_before(b)))
+                .filter(|p| p.depth > 0.0 && p.facing == outward)
                 .collect();
             if pushes.is_empty() {
                 break;
@@ -135,8 +178,11 @@ impl FaceContact {
             return None;
         }
         let corners = self.faces[c.triangle as usize];
-        // The constraint `(Σ bᵢ xᵢ − p)·n ≥ margin` with the point fixed: corner i moves
-        // by wᵢ bᵢ / Σ wⱼ bⱼ² times the depth along n (wᵢ 0 for a pinned corner).
+        // Each movable corner moves along n by the depth times its barycentric share
+        // over the largest movable share: the nearest corner by the whole depth, the
+        // others less. The exact position-based answer (bᵢ / Σ bⱼ²) moves a lone
+        // movable corner of small share by many times the depth, and flung a dress's
+        // vertex at 90 m/s.
         let shares: [f64; 3] = std::array::from_fn(|k| {
             if self.movable[corners[k] as usize] {
                 c.barycentric[k]
@@ -144,15 +190,15 @@ impl FaceContact {
                 0.0
             }
         });
-        let norm2: f64 = shares.iter().map(|b| b * b).sum();
-        if norm2 <= 1e-12 {
+        let largest = shares.iter().cloned().fold(0.0, f64::max);
+        if largest <= 1e-9 {
             return None;
         }
         let depth = margin - dot(sub(c.point, p), n);
         Some(Push {
             corners,
-            shares,
-            unit: n.map(|x| x * depth / norm2),
+            shares: shares.map(|b| b / largest),
+            unit: n.map(|x| x * depth),
             depth,
             facing: turn > 0.0,
         })
@@ -162,9 +208,10 @@ impl FaceContact {
 /// One body vertex's find: a cloth face over the skin and the push it would give it.
 struct Push {
     corners: [u32; 3],
-    /// The corners' barycentric shares (0 for a pinned corner).
+    /// The corners' shares of the push: barycentric over the largest movable one (0
+    /// for a pinned corner).
     shares: [f64; 3],
-    /// The push of a corner with share 1.
+    /// The push of a corner with share 1: the depth along the body's normal.
     unit: [f64; 3],
     /// How far the face is inside the margin along the body's normal (≤ 0: clear).
     depth: f64,
@@ -230,13 +277,16 @@ mod tests {
             f.swap(1, 2);
         }
         let body = sphere([0.15, -0.19, 0.15], 0.2);
+        // At the start of the step the sphere was 5 mm under the sheet.
+        let before = sphere([0.15, -0.205, 0.15], 0.2);
         for sheet in [up, down] {
             let n = sheet.vertex_count();
             let mut x = sheet.positions.clone();
             let outside = body.signed_distances(&x).unwrap();
             assert!(outside.iter().all(|&d| d > 0.0), "{outside:?}");
-            let contact = FaceContact::new(&sheet, &vec![false; n]).unwrap();
-            let moved = contact.apply(&mut x, &body, 0.002).unwrap();
+            let contact = FaceContact::new(&sheet, &vec![false; n], &[]).unwrap();
+            let start = (&sheet.positions[..], &before);
+            let moved = contact.apply(start, &mut x, &body, 0.002).unwrap();
             assert!(moved >= 3, "{moved} vertices moved");
             // The sphere's top is now under the cloth: the cloth above it by the
             // margin, near enough (the faces are flat, the sphere is not).
@@ -259,24 +309,47 @@ mod tests {
         // Beyond the hem at x = 0.3: the sphere rises above y = 0 only past x = 0.318,
         // where the nearest cloth is the hem's edge, and lies 6.7 mm under the hem.
         let past_the_hem = sphere([0.38, -0.19, 0.15], 0.2);
-        let contact = FaceContact::new(&sheet, &vec![false; n]).unwrap();
+        let contact = FaceContact::new(&sheet, &vec![false; n], &[]).unwrap();
+        let rest = &sheet.positions[..];
         let mut x = sheet.positions.clone();
-        assert_eq!(contact.apply(&mut x, &past_the_hem, 0.002).unwrap(), 0);
+        let moved = contact.apply((rest, &past_the_hem), &mut x, &past_the_hem, 0.002);
+        assert_eq!(moved.unwrap(), 0);
         assert_eq!(x, sheet.positions);
         // Every corner pinned: nothing moves.
-        let pinned = FaceContact::new(&sheet, &vec![true; n]).unwrap();
+        let pinned = FaceContact::new(&sheet, &vec![true; n], &[]).unwrap();
         let mut x = sheet.positions.clone();
         let body = sphere([0.15, -0.19, 0.15], 0.2);
-        assert_eq!(pinned.apply(&mut x, &body, 0.002).unwrap(), 0);
+        let under = sphere([0.15, -0.25, 0.15], 0.2);
+        let moved = pinned.apply((rest, &under), &mut x, &body, 0.002);
+        assert_eq!(moved.unwrap(), 0);
         assert_eq!(x, sheet.positions);
         // A body well under the cloth: nothing moves.
-        let under = sphere([0.15, -0.25, 0.15], 0.2);
         let mut x = sheet.positions.clone();
-        assert_eq!(contact.apply(&mut x, &under, 0.002).unwrap(), 0);
+        let moved = contact.apply((rest, &under), &mut x, &under, 0.002);
+        assert_eq!(moved.unwrap(), 0);
+        // A hand held in front of the cloth, thinner than the reach: the cloth is
+        // behind the back of the hand, as it was at the start of the step, so it did
+        // not come through and nothing moves.
+        let hand = sphere([0.15, 0.016, 0.15], 0.012);
+        let mut x = sheet.positions.clone();
+        let moved = contact.apply((rest, &hand), &mut x, &hand, 0.002);
+        assert_eq!(moved.unwrap(), 0);
+        assert_eq!(x, sheet.positions);
+        // The same hand come up through the cloth in the step: the cloth goes over it.
+        let hand_under = sphere([0.15, -0.016, 0.15], 0.012);
+        let skipping =
+            FaceContact::new(&sheet, &vec![false; n], &vec![true; hand.positions().len()]).unwrap();
+        let mut y = sheet.positions.clone();
+        let moved = skipping.apply((rest, &hand_under), &mut y, &hand, 0.002);
+        assert_eq!(moved.unwrap(), 0, "a skipped body vertex pushed a face");
+        let moved = contact.apply((rest, &hand_under), &mut x, &hand, 0.002);
+        assert!(moved.unwrap() > 0);
         // Bad input, named.
-        let err = contact.apply(&mut x[..n - 1], &under, 0.002).unwrap_err();
+        let err = contact
+            .apply((rest, &under), &mut x[..n - 1], &under, 0.002)
+            .unwrap_err();
         assert!(err.to_string().contains("positions"), "{err}");
-        let err = FaceContact::new(&sheet, &vec![false; n - 1]).unwrap_err();
+        let err = FaceContact::new(&sheet, &vec![false; n - 1], &[]).unwrap_err();
         assert!(err.to_string().contains("pinned flags"), "{err}");
     }
 }

@@ -235,7 +235,7 @@ impl<'a> Corrector<'a> {
         };
         let faces = match options.contact_margin {
             Some(_) => Some(
-                FaceContact::new(&g.rest, &g.pinned)
+                FaceContact::new(&g.rest, &g.pinned, &scene.omit)
                     .map_err(|e| ModelError::Garment(format!("the face contacts: {e}")))?,
             ),
             None => None,
@@ -284,26 +284,33 @@ impl<'a> Corrector<'a> {
                 project_contacts(x, &contacts.collision, &contacts.grips, margin)
                     .map_err(|e| failed("the contact projection", e))
             };
+            // What came through the cloth between its vertices (a knee through a
+            // triangle whose corners are all outside): its faces pushed off the body.
+            let begin = match self.faces {
+                Some(_) => Some(scene.posed_body(StepAt { settle: true, ..at })?),
+                None => None,
+            };
+            let faces = |x: &mut [[f64; 3]]| match (&self.faces, &begin) {
+                (Some(faces), Some(begin)) => faces
+                    .apply((cur, begin.surface()), x, end.surface(), margin)
+                    .map_err(|e| failed("the face contacts", e)),
+                _ => Ok(0),
+            };
             done.vertices_projected = project(next)?;
             if self.limiter.is_some() {
                 for _ in 0..CONTACT_ROUNDS {
                     limit(next, ROUND_SWEEPS)?;
                     project(next)?;
+                    faces(next)?;
                 }
                 // The limit has the last word before the push-out: ending the rounds on
                 // the projection left a hem vertex that rested on a foot held to it by
                 // its grip, 3.5 rest lengths from its neighbours (docs/hood.md item 12).
                 limit(next, ROUND_SWEEPS)?;
             }
-            // What came through the cloth between its vertices (a knee through a
-            // triangle whose corners are all outside): its faces pushed off the body,
-            // before the push-out, which moves out any corner they pushed into another
-            // part of the body (a thigh into the other in a crouch).
-            if let Some(faces) = &self.faces {
-                done.vertices_projected += faces
-                    .apply(next, end.surface(), margin)
-                    .map_err(|e| failed("the face contacts", e))?;
-            }
+            // The faces once more before the push-out, which moves out any corner they
+            // pushed into another part of the body (a thigh into the other in a crouch).
+            done.vertices_projected += faces(next)?;
             // What no plane reached (a vertex farther than the contact radius at t that
             // the step, the strain limit or the faces moved into the body): the closest
             // surface point at t + 1. Pinned vertices keep their targets.
