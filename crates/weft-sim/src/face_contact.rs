@@ -26,9 +26,6 @@ use crate::error::{check_len, check_nonneg, SimError};
 /// came through the cloth by more than this in one step is not pulled back.
 pub const FACE_CONTACT_REACH: f64 = 0.04;
 
-/// Passes of [`FaceContact::apply`]: a moved face can uncover the next body vertex.
-pub const FACE_CONTACT_PASSES: usize = 3;
-
 /// The cosine between a cloth face's normal and the body's normal above which the face
 /// counts as lying on the skin there: a panel passing beside a thigh, seen edge-on from
 /// an inner-thigh vertex, is not pushed sideways.
@@ -67,54 +64,56 @@ impl FaceContact {
         })
     }
 
-    /// Pushes the faces of the garment at `x` off every vertex of `body` that came
-    /// through them in the step from `start` (the garment and the body at its
-    /// beginning), to `margin` (m) out along the body's normal, in
-    /// [`FACE_CONTACT_PASSES`] passes; returns how many garment vertices moved. A body
-    /// vertex that was already on the cloth's outer side at the start (the back of a
-    /// hand held in front of a skirt, thinner than the reach) is not one that came
-    /// through.
+    /// A step from the garment at `cloth` on `start` (both at the beginning of the
+    /// step) to the body `end`: which body vertices were already on the cloth's outer
+    /// side, and the body's normals at the end.
+    pub fn step(
+        &self,
+        cloth: &[[f64; 3]],
+        start: &BodySurface,
+        end: &BodySurface,
+    ) -> Result<ContactStep, SimError> {
+        check_len("positions at the start", self.movable.len(), cloth.len())?;
+        check_len(
+            "body vertices at the end",
+            start.positions().len(),
+            end.positions().len(),
+        )?;
+        // With a zero margin a positive depth is a face behind the body vertex.
+        let behind = self
+            .finds(cloth, start, &start.vertex_normals(), 0.0)?
+            .into_iter()
+            .map(|p| p.filter(|p| p.depth > 0.0).map(|p| p.facing))
+            .collect();
+        Ok(ContactStep {
+            behind,
+            normals: end.vertex_normals(),
+        })
+    }
+
+    /// Pushes the faces of the garment at `x` off every vertex of `body` (the end of
+    /// `step`) that came through them in the step, to `margin` (m) out along the
+    /// body's normal, in at most `passes` passes; returns how many garment vertices
+    /// moved. A body vertex that was already on the cloth's outer side at the start
+    /// (the back of a hand held in front of a skirt, thinner than the reach) is not one
+    /// that came through.
     pub fn apply(
         &self,
-        start: (&[[f64; 3]], &BodySurface),
+        step: &ContactStep,
         x: &mut [[f64; 3]],
         body: &BodySurface,
         margin: f64,
+        passes: usize,
     ) -> Result<usize, SimError> {
-        check_len("positions", self.movable.len(), x.len())?;
-        check_len("positions at the start", self.movable.len(), start.0.len())?;
         check_len(
-            "body vertices at the start",
+            "body vertices of the step",
             body.positions().len(),
-            start.1.positions().len(),
+            step.behind.len(),
         )?;
         check_nonneg(|| "face contact margin".into(), margin, true)?;
-        if !self.skipped.is_empty() {
-            check_len(
-                "skipped body flags",
-                body.positions().len(),
-                self.skipped.len(),
-            )?;
-        }
-        let finds =
-            |cloth: &[[f64; 3]], body: &BodySurface| -> Result<Vec<Option<Push>>, SimError> {
-                let cloth = BodySurface::new(cloth, &self.faces)?;
-                let normals = body.vertex_normals();
-                Ok(body
-                    .positions()
-                    .par_iter()
-                    .zip(&normals)
-                    .enumerate()
-                    .map(|(j, (&p, &n))| match self.skipped.get(j) {
-                        Some(true) => None,
-                        _ => self.push(&cloth, p, n, margin),
-                    })
-                    .collect())
-            };
-        let before = finds(start.0, start.1)?;
         let mut moved = vec![false; x.len()];
-        for _ in 0..FACE_CONTACT_PASSES {
-            let found = finds(x, body)?;
+        for _ in 0..passes {
+            let found = self.finds(x, body, &step.normals, margin)?;
             // Which way the garment's faces turn: the way most faces over the skin
             // turn (a mesh may be wound either way). A face turned the other way is
             // the far side of a thin limb or the underside of a fold, not cloth the
@@ -125,14 +124,11 @@ impl FaceContact {
                 .map(|p| if p.facing { 1i64 } else { -1 })
                 .sum::<i64>()
                 >= 0;
-            let outside_before = |b: &Option<Push>| {
-                b.as_ref()
-                    .is_some_and(|b| b.facing == outward && b.depth > margin)
-            };
             let pushes: Vec<&Push> = found
                 .iter()
-                .zip(&before)
-                .filter_map(|(p, b)| p.as_ref().filter(|_| !outside_before(b)))
+                .zip(&step.behind)
+                .filter(|(_, behind)| **behind != Some(outward))
+                .filter_map(|(p, _)| p.as_ref())
                 .filter(|p| p.depth > 0.0 && p.facing == outward)
                 .collect();
             if pushes.is_empty() {
@@ -160,6 +156,47 @@ impl FaceContact {
             }
         }
         Ok(moved.iter().filter(|&&m| m).count())
+    }
+
+    /// [`FaceContact::push`] for every vertex of `body` against the garment at `cloth`
+    /// (none for a skipped body vertex or one farther than the reach from the
+    /// garment's bounding box).
+    fn finds(
+        &self,
+        cloth: &[[f64; 3]],
+        body: &BodySurface,
+        normals: &[[f64; 3]],
+        margin: f64,
+    ) -> Result<Vec<Option<Push>>, SimError> {
+        check_len("positions", self.movable.len(), cloth.len())?;
+        if !self.skipped.is_empty() {
+            check_len(
+                "skipped body flags",
+                body.positions().len(),
+                self.skipped.len(),
+            )?;
+        }
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in cloth {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k] - FACE_CONTACT_REACH);
+                hi[k] = hi[k].max(p[k] + FACE_CONTACT_REACH);
+            }
+        }
+        let near = |p: &[f64; 3]| (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]);
+        let surface = BodySurface::new(cloth, &self.faces)?;
+        Ok(body
+            .positions()
+            .par_iter()
+            .zip(normals)
+            .enumerate()
+            .map(|(j, (p, &n))| match self.skipped.get(j) {
+                Some(true) => None,
+                _ if !near(p) => None,
+                _ => self.push(&surface, *p, n, margin),
+            })
+            .collect())
     }
 
     /// What the body vertex at `p` with outward normal `n` finds of the cloth: its
@@ -203,6 +240,15 @@ impl FaceContact {
             facing: turn > 0.0,
         })
     }
+}
+
+/// One step of [`FaceContact::step`]: per body vertex, whether the cloth was behind it
+/// at the start of the step (and which way that face turned), and the body's vertex
+/// normals at its end.
+#[derive(Clone, Debug)]
+pub struct ContactStep {
+    behind: Vec<Option<bool>>,
+    normals: Vec<[f64; 3]>,
 }
 
 /// One body vertex's find: a cloth face over the skin and the push it would give it.
@@ -285,8 +331,8 @@ mod tests {
             let outside = body.signed_distances(&x).unwrap();
             assert!(outside.iter().all(|&d| d > 0.0), "{outside:?}");
             let contact = FaceContact::new(&sheet, &vec![false; n], &[]).unwrap();
-            let start = (&sheet.positions[..], &before);
-            let moved = contact.apply(start, &mut x, &body, 0.002).unwrap();
+            let step = contact.step(&sheet.positions, &before, &body).unwrap();
+            let moved = contact.apply(&step, &mut x, &body, 0.002, 3).unwrap();
             assert!(moved >= 3, "{moved} vertices moved");
             // The sphere's top is now under the cloth: the cloth above it by the
             // margin, near enough (the faces are flat, the sphere is not).
@@ -304,15 +350,20 @@ mod tests {
     fn hems_pinned_corners_and_far_bodies_are_left_alone() {
         let sheet = grid(4, 4, 0.1);
         let n = sheet.vertex_count();
-        // Through a cell at the sheet's edge, beyond its boundary: the body vertex's
-        // nearest cloth point is on the hem, so nothing moves.
         // Beyond the hem at x = 0.3: the sphere rises above y = 0 only past x = 0.318,
-        // where the nearest cloth is the hem's edge, and lies 6.7 mm under the hem.
+        // where the body vertices' nearest cloth is the hem's edge, and lies 6.7 mm
+        // under the hem, so nothing moves.
         let past_the_hem = sphere([0.38, -0.19, 0.15], 0.2);
         let contact = FaceContact::new(&sheet, &vec![false; n], &[]).unwrap();
         let rest = &sheet.positions[..];
         let mut x = sheet.positions.clone();
-        let moved = contact.apply((rest, &past_the_hem), &mut x, &past_the_hem, 0.002);
+        let moved = contact.apply(
+            &contact.step(rest, &past_the_hem, &past_the_hem).unwrap(),
+            &mut x,
+            &past_the_hem,
+            0.002,
+            3,
+        );
         assert_eq!(moved.unwrap(), 0);
         assert_eq!(x, sheet.positions);
         // Every corner pinned: nothing moves.
@@ -320,19 +371,37 @@ mod tests {
         let mut x = sheet.positions.clone();
         let body = sphere([0.15, -0.19, 0.15], 0.2);
         let under = sphere([0.15, -0.25, 0.15], 0.2);
-        let moved = pinned.apply((rest, &under), &mut x, &body, 0.002);
+        let moved = pinned.apply(
+            &pinned.step(rest, &under, &body).unwrap(),
+            &mut x,
+            &body,
+            0.002,
+            3,
+        );
         assert_eq!(moved.unwrap(), 0);
         assert_eq!(x, sheet.positions);
         // A body well under the cloth: nothing moves.
         let mut x = sheet.positions.clone();
-        let moved = contact.apply((rest, &under), &mut x, &under, 0.002);
+        let moved = contact.apply(
+            &contact.step(rest, &under, &under).unwrap(),
+            &mut x,
+            &under,
+            0.002,
+            3,
+        );
         assert_eq!(moved.unwrap(), 0);
         // A hand held in front of the cloth, thinner than the reach: the cloth is
         // behind the back of the hand, as it was at the start of the step, so it did
         // not come through and nothing moves.
         let hand = sphere([0.15, 0.016, 0.15], 0.012);
         let mut x = sheet.positions.clone();
-        let moved = contact.apply((rest, &hand), &mut x, &hand, 0.002);
+        let moved = contact.apply(
+            &contact.step(rest, &hand, &hand).unwrap(),
+            &mut x,
+            &hand,
+            0.002,
+            3,
+        );
         assert_eq!(moved.unwrap(), 0);
         assert_eq!(x, sheet.positions);
         // The same hand come up through the cloth in the step: the cloth goes over it.
@@ -340,13 +409,26 @@ mod tests {
         let skipping =
             FaceContact::new(&sheet, &vec![false; n], &vec![true; hand.positions().len()]).unwrap();
         let mut y = sheet.positions.clone();
-        let moved = skipping.apply((rest, &hand_under), &mut y, &hand, 0.002);
+        let moved = skipping.apply(
+            &skipping.step(rest, &hand_under, &hand).unwrap(),
+            &mut y,
+            &hand,
+            0.002,
+            3,
+        );
         assert_eq!(moved.unwrap(), 0, "a skipped body vertex pushed a face");
-        let moved = contact.apply((rest, &hand_under), &mut x, &hand, 0.002);
+        let moved = contact.apply(
+            &contact.step(rest, &hand_under, &hand).unwrap(),
+            &mut x,
+            &hand,
+            0.002,
+            3,
+        );
         assert!(moved.unwrap() > 0);
         // Bad input, named.
+        let step = contact.step(rest, &under, &under).unwrap();
         let err = contact
-            .apply((rest, &under), &mut x[..n - 1], &under, 0.002)
+            .apply(&step, &mut x[..n - 1], &under, 0.002, 3)
             .unwrap_err();
         assert!(err.to_string().contains("positions"), "{err}");
         let err = FaceContact::new(&sheet, &vec![false; n - 1], &[]).unwrap_err();

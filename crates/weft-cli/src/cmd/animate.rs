@@ -56,7 +56,9 @@ pub struct AnimateArgs {
     /// no hard contact constraint (legs can pass through a predicted skirt); 4 is the
     /// margin garments are fitted with. A HOOD rollout does it after every step
     /// instead, against the collision term's contact planes with the material's
-    /// friction against the body, and goes on from the garment outside the body.
+    /// friction against the body, pushes the cloth's faces off any part of the body
+    /// that came through them between vertices, and goes on from the garment outside
+    /// the body.
     #[arg(long, value_name = "MM")]
     push_out: Option<f64>,
     /// The β the garment was made for (comma-separated), when that is not the --betas

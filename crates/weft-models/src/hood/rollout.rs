@@ -103,9 +103,10 @@ pub struct RolloutOptions {
     /// Run-time contact projection: after every step (and after the strain limit),
     /// vertices nearer than this (m) to the collision term's contact planes, or behind
     /// them, move onto them at this distance ([`project_contacts`], with the friction
-    /// of the garment's material against the body points they touched); free vertices
-    /// still inside the body or nearer to it then move to its closest point plus this
-    /// distance. `None`: off (HOOD).
+    /// of the garment's material against the body points they touched), the faces that
+    /// a body vertex came through in the step are pushed off it ([`FaceContact`]), and
+    /// free vertices still inside the body or nearer to it then move to its closest
+    /// point plus this distance. `None`: off (HOOD).
     pub contact_margin: Option<f64>,
 }
 
@@ -133,6 +134,10 @@ pub const STRAIN_LIMIT_SWEEPS: usize = 100;
 /// of each, a sleeve's edges next to a contact ended steps 7 rest lengths over
 /// (docs/hood.md item 11).
 pub const CONTACT_ROUNDS: usize = 5;
+
+/// Passes of the face contacts ([`FaceContact`]) after the last round (one in each
+/// round): a moved face can uncover the next body vertex.
+pub const FACE_PASSES: usize = 3;
 
 /// Gauss–Seidel sweeps of the strain limit in each of [`CONTACT_ROUNDS`].
 pub const ROUND_SWEEPS: usize = 10;
@@ -286,13 +291,17 @@ impl<'a> Corrector<'a> {
             };
             // What came through the cloth between its vertices (a knee through a
             // triangle whose corners are all outside): its faces pushed off the body.
-            let begin = match self.faces {
-                Some(_) => Some(scene.posed_body(StepAt { settle: true, ..at })?),
+            let step = match &self.faces {
+                Some(faces) => {
+                    let begin = scene.posed_body(StepAt { settle: true, ..at })?;
+                    let step = faces.step(cur, begin.surface(), end.surface());
+                    Some(step.map_err(|e| failed("the face contacts", e))?)
+                }
                 None => None,
             };
-            let faces = |x: &mut [[f64; 3]]| match (&self.faces, &begin) {
-                (Some(faces), Some(begin)) => faces
-                    .apply((cur, begin.surface()), x, end.surface(), margin)
+            let faces = |x: &mut [[f64; 3]], passes: usize| match (&self.faces, &step) {
+                (Some(faces), Some(step)) => faces
+                    .apply(step, x, end.surface(), margin, passes)
                     .map_err(|e| failed("the face contacts", e)),
                 _ => Ok(0),
             };
@@ -301,7 +310,7 @@ impl<'a> Corrector<'a> {
                 for _ in 0..CONTACT_ROUNDS {
                     limit(next, ROUND_SWEEPS)?;
                     project(next)?;
-                    faces(next)?;
+                    faces(next, 1)?;
                 }
                 // The limit has the last word before the push-out: ending the rounds on
                 // the projection left a hem vertex that rested on a foot held to it by
@@ -310,7 +319,7 @@ impl<'a> Corrector<'a> {
             }
             // The faces once more before the push-out, which moves out any corner they
             // pushed into another part of the body (a thigh into the other in a crouch).
-            done.vertices_projected += faces(next)?;
+            done.vertices_projected += faces(next, FACE_PASSES)?;
             // What no plane reached (a vertex farther than the contact radius at t that
             // the step, the strain limit or the faces moved into the body): the closest
             // surface point at t + 1. Pinned vertices keep their targets.
