@@ -141,7 +141,7 @@ impl FaceContact {
                 for (&v, &w) in p.corners.iter().zip(&p.shares) {
                     let push = p.unit.map(|x| w * x);
                     let slot = &mut largest[v as usize];
-                    if w > 0.0 && slot.is_none_or(|s| norm(push) > norm(s)) {
+                    if w > 0.0 && slot.map_or(true, |s| norm(push) > norm(s)) {
                         *slot = Some(push);
                     }
                 }
