@@ -346,87 +346,56 @@ mod tests {
         }
     }
 
+    /// The garment vertices `contact` moves on the sheet at rest, in the step from the
+    /// body `before` to `after` (2 mm margin), and where they end.
+    fn moved(
+        contact: &FaceContact,
+        sheet: &TriMesh,
+        before: &BodySurface,
+        after: &BodySurface,
+    ) -> (usize, Vec<[f64; 3]>) {
+        let mut x = sheet.positions.clone();
+        let step = contact.step(&sheet.positions, before, after).unwrap();
+        let n = contact.apply(&step, &mut x, after, 0.002, 3).unwrap();
+        (n, x)
+    }
+
     #[test]
     fn hems_pinned_corners_and_far_bodies_are_left_alone() {
         let sheet = grid(4, 4, 0.1);
         let n = sheet.vertex_count();
+        let contact = FaceContact::new(&sheet, &vec![false; n], &[]).unwrap();
+        let unmoved = (0, sheet.positions.clone());
         // Beyond the hem at x = 0.3: the sphere rises above y = 0 only past x = 0.318,
         // where the body vertices' nearest cloth is the hem's edge, and lies 6.7 mm
         // under the hem, so nothing moves.
         let past_the_hem = sphere([0.38, -0.19, 0.15], 0.2);
-        let contact = FaceContact::new(&sheet, &vec![false; n], &[]).unwrap();
-        let rest = &sheet.positions[..];
-        let mut x = sheet.positions.clone();
-        let moved = contact.apply(
-            &contact.step(rest, &past_the_hem, &past_the_hem).unwrap(),
-            &mut x,
-            &past_the_hem,
-            0.002,
-            3,
+        assert_eq!(
+            moved(&contact, &sheet, &past_the_hem, &past_the_hem),
+            unmoved
         );
-        assert_eq!(moved.unwrap(), 0);
-        assert_eq!(x, sheet.positions);
         // Every corner pinned: nothing moves.
         let pinned = FaceContact::new(&sheet, &vec![true; n], &[]).unwrap();
-        let mut x = sheet.positions.clone();
         let body = sphere([0.15, -0.19, 0.15], 0.2);
         let under = sphere([0.15, -0.25, 0.15], 0.2);
-        let moved = pinned.apply(
-            &pinned.step(rest, &under, &body).unwrap(),
-            &mut x,
-            &body,
-            0.002,
-            3,
-        );
-        assert_eq!(moved.unwrap(), 0);
-        assert_eq!(x, sheet.positions);
+        assert_eq!(moved(&pinned, &sheet, &under, &body), unmoved);
         // A body well under the cloth: nothing moves.
-        let mut x = sheet.positions.clone();
-        let moved = contact.apply(
-            &contact.step(rest, &under, &under).unwrap(),
-            &mut x,
-            &under,
-            0.002,
-            3,
-        );
-        assert_eq!(moved.unwrap(), 0);
+        assert_eq!(moved(&contact, &sheet, &under, &under), unmoved);
         // A hand held in front of the cloth, thinner than the reach: the cloth is
         // behind the back of the hand, as it was at the start of the step, so it did
         // not come through and nothing moves.
         let hand = sphere([0.15, 0.016, 0.15], 0.012);
-        let mut x = sheet.positions.clone();
-        let moved = contact.apply(
-            &contact.step(rest, &hand, &hand).unwrap(),
-            &mut x,
-            &hand,
-            0.002,
-            3,
-        );
-        assert_eq!(moved.unwrap(), 0);
-        assert_eq!(x, sheet.positions);
-        // The same hand come up through the cloth in the step: the cloth goes over it.
+        assert_eq!(moved(&contact, &sheet, &hand, &hand), unmoved);
+        // The same hand come up through the cloth in the step: the cloth goes over it,
+        // unless the hand's vertices are skipped.
         let hand_under = sphere([0.15, -0.016, 0.15], 0.012);
-        let skipping =
-            FaceContact::new(&sheet, &vec![false; n], &vec![true; hand.positions().len()]).unwrap();
-        let mut y = sheet.positions.clone();
-        let moved = skipping.apply(
-            &skipping.step(rest, &hand_under, &hand).unwrap(),
-            &mut y,
-            &hand,
-            0.002,
-            3,
-        );
-        assert_eq!(moved.unwrap(), 0, "a skipped body vertex pushed a face");
-        let moved = contact.apply(
-            &contact.step(rest, &hand_under, &hand).unwrap(),
-            &mut x,
-            &hand,
-            0.002,
-            3,
-        );
-        assert!(moved.unwrap() > 0);
+        let hands = vec![true; hand.positions().len()];
+        let skipping = FaceContact::new(&sheet, &vec![false; n], &hands).unwrap();
+        assert_eq!(moved(&skipping, &sheet, &hand_under, &hand), unmoved);
+        assert!(moved(&contact, &sheet, &hand_under, &hand).0 > 0);
         // Bad input, named.
-        let step = contact.step(rest, &under, &under).unwrap();
+        let step = contact.step(&sheet.positions, &under, &under).unwrap();
+        let mut x = sheet.positions.clone();
         let err = contact
             .apply(&step, &mut x[..n - 1], &under, 0.002, 3)
             .unwrap_err();
