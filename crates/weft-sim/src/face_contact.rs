@@ -5,10 +5,10 @@
 //! a knee through a 3 cm triangle whose three corners lie outside the skin, the middle
 //! of the triangle inside it (docs/hood.md item 12). Collision handling in simulators
 //! takes both point–triangle cases for this reason (Bridson et al. 2002); here the
-//! body is the point side. Every body vertex whose nearest cloth point, within a reach,
-//! lies inside a face or on an interior edge, on a face roughly parallel to the skin
-//! there and turned the way most such faces turn, and less than a margin out along the
-//! body's normal, pushes that face's
+//! body is the point side. Every body vertex that came through the cloth in the step,
+//! whose nearest cloth point within a reach lies inside a face or on an interior edge,
+//! on a face roughly parallel to the skin there and turned the way most such faces
+//! turn, and less than a margin out along the body's normal, pushes that face's
 //! corners out along the normal, weighted by its barycentric coordinates, so that the
 //! body vertex ends under the cloth (a point–triangle constraint with an immovable
 //! point, as position-based dynamics takes them, Müller et al. 2007, bounded by the
