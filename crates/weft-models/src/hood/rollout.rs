@@ -258,8 +258,9 @@ impl<'a> Corrector<'a> {
     /// `cur`, on the swept body when the run uses swept contacts, so a limb that passed
     /// through the cloth in the step pushes it back to its side, and the material's
     /// friction carries it on with the limb), with both given [`CONTACT_ROUNDS`] rounds
-    /// of the two and a last limit, then the push-out of what is still inside. The
-    /// rollout goes on from the corrected positions.
+    /// of the two (and of the face contacts) and a last limit, then the face contacts
+    /// ([`FACE_PASSES`]) and the push-out of what is still inside. The rollout goes on
+    /// from the corrected positions.
     fn correct(
         &self,
         cur: &[[f64; 3]],
