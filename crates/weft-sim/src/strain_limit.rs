@@ -164,8 +164,11 @@ impl StrainLimit {
             }
             report.sweeps = sweep + 1;
         }
-        report.strain_max = self.strains(x).fold(f64::NEG_INFINITY, f64::max);
-        report.strain_min = self.strains(x).fold(f64::INFINITY, f64::min);
+        (report.strain_min, report.strain_max) = self
+            .strains(x)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+                (lo.min(s), hi.max(s))
+            });
         Ok(report)
     }
 

@@ -55,6 +55,11 @@ impl SweptBody {
         })
     }
 
+    /// The body at `t`.
+    pub fn before(&self) -> &PosedBody {
+        &self.before
+    }
+
     /// The body at `t + 1`.
     pub fn after(&self) -> &PosedBody {
         &self.after

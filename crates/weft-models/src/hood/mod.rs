@@ -33,5 +33,5 @@ pub use rollout::{
     roll_out, Advance, Corrections, Rollout, RolloutOptions, CONTACT_ROUNDS, ROUND_SWEEPS,
     STRAIN_LIMIT_SWEEPS,
 };
-pub use scene::{Materials, Scene, State, StateRef, StepAt};
+pub use scene::{Materials, Scene, State, StateRef, StepAt, StepBodies};
 pub use stats::{HoodStats, HoodStatsFit, STATS_FILE};

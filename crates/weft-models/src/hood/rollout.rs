@@ -281,10 +281,11 @@ impl<'a> Corrector<'a> {
         };
         done.edges_limited = limit(next, STRAIN_LIMIT_SWEEPS)?;
         if let Some(margin) = options.contact_margin {
-            let (body, end) = scene.contact_and_posed_body(at)?;
+            let bodies = scene.step_bodies(at)?;
+            let end = &bodies.end;
             let contacts = scene
                 .cloth_at(at)
-                .contacts(cur, &scene.garment.pinned, Some(body.as_ref()))
+                .contacts(cur, &scene.garment.pinned, Some(bodies.contact.as_ref()))
                 .map_err(|e| failed("the contacts", e))?;
             let project = |x: &mut [[f64; 3]]| {
                 project_contacts(x, &contacts.collision, &contacts.grips, margin)
@@ -294,8 +295,7 @@ impl<'a> Corrector<'a> {
             // triangle whose corners are all outside): its faces pushed off the body.
             let step = match &self.faces {
                 Some(faces) => {
-                    let begin = scene.posed_body(StepAt { settle: true, ..at })?;
-                    let step = faces.step(cur, begin.surface(), end.surface());
+                    let step = faces.step(cur, bodies.start.surface(), end.surface());
                     Some(step.map_err(|e| failed("the face contacts", e))?)
                 }
                 None => None,

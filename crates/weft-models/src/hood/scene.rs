@@ -321,19 +321,30 @@ impl Scene {
         Ok(Box::new(self.swept_body(at)?))
     }
 
-    /// [`Scene::contact_body`] and [`Scene::posed_body`] from one build (a swept body
-    /// ends at the posed one): the run-time corrections need both every step.
-    pub fn contact_and_posed_body(
-        &self,
-        at: StepAt,
-    ) -> Result<(Box<dyn BodyProximity + Sync>, PosedBody), ModelError> {
+    /// [`Scene::contact_body`], the body at the start of step `at` and
+    /// [`Scene::posed_body`] from one build (a swept body starts at the first and ends
+    /// at the last): the run-time corrections need all three every step.
+    pub fn step_bodies(&self, at: StepAt) -> Result<StepBodies, ModelError> {
         if !self.swept_contacts || at.settle {
-            let posed = self.posed_body(at)?;
-            return Ok((Box::new(posed.clone()), posed));
+            let start = self.posed_body(StepAt { settle: true, ..at })?;
+            let mut end = start.clone();
+            if !at.settle {
+                end.refit(&self.body[at.t + 1])
+                    .map_err(|e| ModelError::Body(format!("the posed body: {e}")))?;
+            }
+            return Ok(StepBodies {
+                contact: Box::new(end.clone()),
+                start,
+                end,
+            });
         }
         let swept = self.swept_body(at)?;
-        let posed = swept.after().clone();
-        Ok((Box::new(swept), posed))
+        let (start, end) = (swept.before().clone(), swept.after().clone());
+        Ok(StepBodies {
+            contact: Box::new(swept),
+            start,
+            end,
+        })
     }
 
     /// The body swept from frame `at.t` to its state at the end of step `at`.
@@ -373,6 +384,16 @@ impl Scene {
         solver.step(at.dt, Some(body)).map_err(sim)?;
         Ok(solver.positions().to_vec())
     }
+}
+
+/// The bodies of one step ([`Scene::step_bodies`]).
+pub struct StepBodies {
+    /// What the step's contacts are found against ([`Scene::contact_body`]).
+    pub contact: Box<dyn BodyProximity + Sync>,
+    /// The body at the start of the step.
+    pub start: PosedBody,
+    /// The body at the end of the step ([`Scene::posed_body`]).
+    pub end: PosedBody,
 }
 
 /// Body vertices bound mostly (weight > 0.5) to the wrists and hands.
