@@ -309,10 +309,11 @@ pub fn train_hood(
     weft_train::tasks::hood::save_stats(&spec.out, task.stats())?;
     let (garments, motions, validation) = task.describe();
     log(&format!(
-        "training hood ({} preset, propagation radius {} edges) on {garments} garments x {motions} motions, rollouts up to {} steps; {validation} validation scenes -> {}",
+        "training hood ({} preset, propagation radius {} edges) on {garments} garments x {motions} motions, rollouts up to {} steps of 1/{} s; {validation} validation scenes -> {}",
         cfg.preset,
         cfg.model.propagation_radius()?,
         cfg.train.task.max_rollout,
+        cfg.model.step_fps,
         spec.out.display()
     ));
     let model = cfg.model.init(&device)?;

@@ -10,6 +10,7 @@
 use burn::config::Config;
 use burn::module::Param;
 use burn::tensor::Device;
+use weft_motion::MAX_FPS;
 use weft_nn::{MlpConfig, ProcessorConfig};
 
 use super::model::Hood;
@@ -71,6 +72,12 @@ pub struct HoodConfig {
     /// for runs written before it.
     #[config(default = false)]
     pub swept_contacts: bool,
+    /// Network steps per second (seed 004: 30, one a frame of its motions). A rollout
+    /// steps at this rate whatever the motion's ([`HoodConfig::steps`]): a network
+    /// trained at 1/30 s and stepped at the 1/120 s of an AMASS file is outside what it
+    /// learnt (docs/hood.md item 13). Training resamples its motions to this rate.
+    #[config(default = 30.0)]
+    pub step_fps: f64,
 }
 
 /// A parsed schedule: for each message-passing step, the mesh levels it reads.
@@ -114,6 +121,13 @@ impl HoodConfig {
             .sum())
     }
 
+    /// Network steps over a motion of `frames` frames at `fps`: the whole number nearest
+    /// its duration times `step_fps`, at least one; so a step lasts about `1/step_fps`.
+    pub fn steps(&self, frames: usize, fps: f64) -> usize {
+        let duration = frames.saturating_sub(1) as f64 / fps;
+        (duration * self.step_fps).round().max(1.0) as usize
+    }
+
     /// Checks the values; errors name the field.
     pub fn validate(&self) -> Result<(), ModelError> {
         ModelError::check_positive(&[
@@ -125,6 +139,12 @@ impl HoodConfig {
             return Err(ModelError::Config(format!(
                 "settle_dt = {}: expected seconds >= 0 (0: no settling step)",
                 self.settle_dt
+            )));
+        }
+        if !(self.step_fps.is_finite() && self.step_fps > 0.0 && self.step_fps <= MAX_FPS) {
+            return Err(ModelError::Config(format!(
+                "step_fps = {}: expected network steps per second above 0 and at most {MAX_FPS}",
+                self.step_fps
             )));
         }
         if !(self.body_radius.is_finite() && self.body_radius > 0.0) {
@@ -259,6 +279,25 @@ mod tests {
             .grad(&grads)
             .expect("bias gradient");
         assert!(g.abs().sum().into_scalar::<f32>() > 0.0);
+    }
+
+    #[test]
+    fn network_steps_per_motion_frame() {
+        let c = HoodConfig::new();
+        assert_eq!(c.step_fps, 30.0);
+        // A 30 fps motion of 41 frames: a step a frame.
+        assert_eq!(c.steps(41, 30.0), 40);
+        // 120 fps (AMASS): a step every four frames; 25 fps: 1/30 s steps rounded.
+        assert_eq!(c.steps(161, 120.0), 40);
+        assert_eq!(c.steps(26, 25.0), 30);
+        // Never no step.
+        assert_eq!(c.steps(2, 1000.0), 1);
+        let c = c.with_step_fps(60.0);
+        assert_eq!(c.steps(41, 30.0), 80);
+        for bad in [0.0, -30.0, f64::NAN, 2000.0] {
+            let e = c.clone().with_step_fps(bad).validate().unwrap_err();
+            assert!(e.to_string().contains("step_fps"), "{e}");
+        }
     }
 
     #[test]

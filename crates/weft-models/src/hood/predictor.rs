@@ -162,6 +162,7 @@ impl Deformer for HoodPredictor {
             ("checkpoint".into(), self.checkpoint.display().to_string()),
             ("schedule".into(), self.config.schedule.clone()),
             ("latent".into(), self.config.latent.to_string()),
+            ("step_fps".into(), self.config.step_fps.to_string()),
         ])
     }
 

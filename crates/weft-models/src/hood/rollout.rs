@@ -360,7 +360,13 @@ pub fn roll_out(
     options: &RolloutOptions,
     device: &Device,
 ) -> Result<Vec<Rollout>, ModelError> {
-    let buttoned = |t: usize| options.unbutton_at.is_none_or(|f| t < f);
+    // Whether the step that ends at frame `t` of scene `k` is buttoned: `unbutton_at`
+    // counts the motion's frames, the first step that ends at or after it is not.
+    let buttoned = |k: usize, t: usize| {
+        options
+            .unbutton_at
+            .is_none_or(|f| (t as f64) < f as f64 * scenes[k].steps_per_frame - 1e-9)
+    };
     let mut starts = Vec::with_capacity(scenes.len());
     for s in scenes {
         starts.push(s.start(0, true)?);
@@ -370,12 +376,16 @@ pub fn roll_out(
             t: 0,
             settle: true,
             dt: config.settle_dt,
-            buttoned: buttoned(0),
+            buttoned: true,
         };
         let states = scenes
             .iter()
             .zip(&starts)
-            .map(|(s, start)| s.step(start.as_ref(), at, config))
+            .enumerate()
+            .map(|(k, (s, start))| {
+                let buttoned = buttoned(k, 0);
+                s.step(start.as_ref(), StepAt { buttoned, ..at }, config)
+            })
             .collect::<Result<Vec<_>, _>>()?;
         let pairs: Vec<_> = states.iter().map(|(g, a)| (g, a)).collect();
         step_batch(model, stats, &pairs, device)?
@@ -414,7 +424,7 @@ pub fn roll_out(
         t,
         settle: false,
         dt: scenes[k].dt,
-        buttoned: buttoned(t + 1),
+        buttoned: buttoned(k, t + 1),
     };
     let longest = scenes.iter().map(|s| s.frames()).max().unwrap_or(0);
     for t in 0..longest.saturating_sub(1) {
@@ -445,12 +455,60 @@ pub fn roll_out(
             }
         }
     }
-    Ok(out)
+    Ok(out
+        .into_iter()
+        .zip(scenes)
+        .map(|(r, s)| r.motion_frames(s.steps_per_frame, s.motion_frames))
+        .collect())
+}
+
+impl Rollout {
+    /// The first `frames` frames of the motion from a rollout of `per_frame` steps a
+    /// motion frame: a frame that falls on a step's end is that step's, one between two
+    /// steps is interpolated linearly; a divergence is named at the first motion frame
+    /// it kept from being reached.
+    fn motion_frames(self, per_frame: f64, frames: usize) -> Rollout {
+        if per_frame == 1.0 {
+            return self;
+        }
+        let reached = self.frames.len();
+        let mut out = Vec::with_capacity(frames);
+        for i in 0..frames {
+            let at = i as f64 * per_frame;
+            let j = at.round() as usize;
+            // Within rounding of a step's end: that step's frame.
+            if (at - j as f64).abs() < 1e-9 {
+                match self.frames.get(j) {
+                    Some(x) => out.push(x.clone()),
+                    None => break,
+                }
+                continue;
+            }
+            let j = at.floor() as usize;
+            if j + 1 >= reached {
+                break;
+            }
+            let w = at - j as f64;
+            let (a, b) = (&self.frames[j], &self.frames[j + 1]);
+            out.push(
+                a.iter()
+                    .zip(b)
+                    .map(|(a, b)| std::array::from_fn(|k| a[k] + w * (b[k] - a[k])))
+                    .collect(),
+            );
+        }
+        Rollout {
+            stopped: self.stopped.map(|(_, why)| (out.len(), why)),
+            frames: out,
+            corrections: self.corrections,
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::deformer::Clip;
     use weft_mesh::primitives::grid;
     use weft_nn::backend::cpu;
     use weft_nn::FeatureNormalizer;
@@ -485,6 +543,78 @@ mod tests {
                 "settle_dt {settle_dt}: {moved}"
             );
         }
+    }
+
+    /// A rollout steps at the network's rate whatever the motion's and returns the
+    /// motion's frames: the untrained network keeps the skinned garment's velocity, so
+    /// on a body moving at a constant 1.5 m/s every motion frame has the skirt moved by
+    /// the body's displacement, at two steps a frame (30 fps, step_fps 60) and at a
+    /// step every four frames (120 fps, step_fps 30) alike.
+    #[test]
+    fn rollouts_step_at_the_networks_rate_and_return_the_motions_frames() {
+        use crate::hood::Materials;
+        use weft_sim::{Attachment, Material};
+        let (body, skirt) = crate::hood::testutil::body_and_skirt(320);
+        let device = cpu();
+        let hood = Materials::Uniform(Material::hood());
+        let free = (0..skirt.vertex_count())
+            .min_by(|&a, &b| skirt.positions[a][1].total_cmp(&skirt.positions[b][1]))
+            .unwrap();
+        for (fps, step_fps, steps) in [(30.0, 30.0, 3), (30.0, 60.0, 6), (120.0, 30.0, 3)] {
+            let frames = (0.1 * fps) as usize + 1;
+            let (poses, mut trans) = crate::hood::testutil::still(frames);
+            for (t, x) in trans.iter_mut().enumerate() {
+                x[2] = (1.5 * t as f64 / fps) as f32;
+            }
+            let clip = Clip {
+                fps,
+                ..crate::hood::testutil::clip(&poses, &trans)
+            };
+            let config = HoodConfig::preset("cpu").unwrap().with_step_fps(step_fps);
+            let model = InferHood::from(&config.init(&device).unwrap());
+            let stats = HoodStats::identity(config.levels);
+            let scene =
+                Scene::new(&skirt, &body, &clip, &hood, Attachment::TopOpening, &config).unwrap();
+            assert_eq!(scene.frames(), steps + 1, "{fps} fps, step_fps {step_fps}");
+            assert!((scene.dt - 1.0 / step_fps).abs() < 1e-9);
+            let options = RolloutOptions::default();
+            let r = roll_out(&model, &stats, &config, &[&scene], &options, &device).unwrap();
+            let r = &r[0];
+            assert_eq!(r.frames.len(), frames);
+            assert!(r.stopped.is_none());
+            for t in 1..frames {
+                let moved = r.frames[t][free][2] - r.frames[0][free][2];
+                let want = 1.5 * t as f64 / fps;
+                assert!(
+                    (moved - want).abs() < 1e-4,
+                    "{fps} fps, step_fps {step_fps}, frame {t}: {moved} for {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_divergence_is_named_at_the_motion_frame_it_kept_from_being_reached() {
+        let at = |t: f64| vec![[t; 3]];
+        // Steps reached 0..=3, the step to 4 diverged.
+        let r = Rollout {
+            frames: (0..4).map(|t| at(t as f64)).collect(),
+            stopped: Some((4, "fast".into())),
+            corrections: Corrections::default(),
+        };
+        // Two steps a frame: frames 0 and 1 (steps 0 and 2); frame 2 is step 4.
+        let m = r.clone().motion_frames(2.0, 5);
+        assert_eq!(m.frames, vec![at(0.0), at(2.0)]);
+        assert_eq!(m.stopped, Some((2, "fast".into())));
+        // A step every two frames: frames between steps interpolated, up to step 3.
+        let m = r.clone().motion_frames(0.5, 11);
+        let want: Vec<_> = (0..7).map(|i| at(0.5 * i as f64)).collect();
+        assert_eq!(m.frames, want);
+        assert_eq!(m.stopped, Some((7, "fast".into())));
+        assert_eq!(r.clone().motion_frames(1.0, 5), r);
+        // A finished rollout keeps every frame of the motion.
+        let done = Rollout { stopped: None, ..r };
+        assert_eq!(done.motion_frames(0.5, 7).frames.len(), 7);
     }
 
     #[test]

@@ -13,7 +13,7 @@
 //! around it is, a strain no network step can undo: measured, docs/hood.md.)
 
 use weft_body::joints::smpl_joint_index;
-use weft_body::BodyModel;
+use weft_body::{BodyModel, Pose};
 use weft_garment::onbody::push_out;
 use weft_mesh::TriMesh;
 use weft_sim::{
@@ -133,10 +133,44 @@ pub struct Scene {
     pub skinned: Vec<Vec<[f64; 3]>>,
     /// Seconds per frame.
     pub dt: f64,
+    /// Frames of the scene per frame of the motion it was made from: its frames are the
+    /// motion resampled to [`HoodConfig::steps`] steps over its duration (1: the
+    /// motion's own frames).
+    pub steps_per_frame: f64,
+    /// Frames of the motion the scene was made from.
+    pub motion_frames: usize,
     /// The body surface at rest, rebuilt at each step's pose ([`Scene::posed_body`]).
     rest_body: PosedBody,
     /// [`HoodConfig::swept_contacts`].
     swept_contacts: bool,
+}
+
+/// `clip`'s poses, root translations and frame rate resampled to `steps` steps over its
+/// duration (weft-motion's resampling: a frame that falls on one of the clip's is that
+/// frame); `None` when that is a step a frame.
+type Resampled = (Vec<Pose>, Vec<[f32; 3]>, f64);
+fn at_steps(clip: &Clip, steps: usize) -> Result<Option<Resampled>, ModelError> {
+    let intervals = clip.len() - 1;
+    if steps == intervals {
+        return Ok(None);
+    }
+    let fps = clip.fps * steps as f64 / intervals as f64;
+    let err = |e: weft_motion::MotionError| {
+        ModelError::Config(format!(
+            "resampling the motion to {fps} fps (network steps): {e}"
+        ))
+    };
+    let motion = weft_motion::Motion::new(clip.fps, clip.poses.to_vec(), clip.trans.to_vec(), None)
+        .map_err(err)?;
+    let fine = weft_motion::resample(&motion, fps).map_err(err)?;
+    if fine.frame_count() != steps + 1 {
+        return Err(ModelError::mismatch(
+            "resampled motion frames",
+            steps + 1,
+            fine.frame_count(),
+        ));
+    }
+    Ok(Some((fine.poses().to_vec(), fine.trans().to_vec(), fps)))
 }
 
 fn f64s(frame: &[[f32; 3]]) -> Vec<[f64; 3]> {
@@ -162,6 +196,19 @@ impl Scene {
                 clip.len(),
             ));
         }
+        let motion_frames = clip.len();
+        let steps = config.steps(motion_frames, clip.fps);
+        let steps_per_frame = steps as f64 / (motion_frames - 1) as f64;
+        let fine = at_steps(clip, steps)?;
+        let clip = match &fine {
+            Some((poses, trans, fps)) => &Clip {
+                poses,
+                trans,
+                fps: *fps,
+                ..*clip
+            },
+            None => clip,
+        };
         let cloth = materials.cloth(garment)?;
         let pinned = attachment.vertices(garment);
         let n = garment.vertex_count();
@@ -205,6 +252,8 @@ impl Scene {
             },
             skinned,
             dt: 1.0 / clip.fps,
+            steps_per_frame,
+            motion_frames,
             rest_body: rest_surface,
             swept_contacts: config.swept_contacts,
         })

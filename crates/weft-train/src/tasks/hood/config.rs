@@ -38,7 +38,8 @@ pub struct HoodTraining {
     pub motions: Vec<String>,
     /// Motion files (AMASS `.npz`, BVH) drawn beside the procedural ones.
     pub motion_files: Vec<PathBuf>,
-    /// Frames of each procedural motion (at 30 fps).
+    /// Frames of each procedural motion at 30 fps (the pool's motions are resampled to
+    /// `[model] step_fps`, so the rollout lengths below count network steps).
     pub motion_frames: usize,
     /// The longest rollout of the curriculum (HOOD: 5).
     pub max_rollout: usize,
@@ -86,11 +87,17 @@ pub struct HoodTraining {
     /// starts skinned, so the network never trains on the states its own errors lead to
     /// in a long rollout, and a rollout that drifts keeps drifting (docs/hood.md).
     pub replay: f64,
-    /// The most frames a kept rollout runs before its slot starts afresh.
+    /// Share of samples whose rollout goes on from weft-sim's implicit step instead of
+    /// the network's prediction (the network still takes every step's loss), and is
+    /// kept for replay so. The network's own rollouts swing less than the implicit
+    /// step's (docs/hood.md item 12), so without it it never sees the momentum a
+    /// garment builds over many frames. 0: the network's steps only (HOOD).
+    pub solver_states: f64,
+    /// The most steps a kept rollout runs before its slot starts afresh.
     pub replay_frames: usize,
     /// Validation scenes (held-out shapes, motions and materials) and their frames.
     pub validation_scenes: usize,
-    /// Frames of each validation rollout.
+    /// Steps of each validation rollout.
     pub validation_frames: usize,
 }
 
@@ -143,6 +150,7 @@ impl HoodTraining {
             solver_weight: 0.0,
             solver_edge_weight: 0.0,
             replay: 0.0,
+            solver_states: 0.0,
             replay_frames: 60,
             validation_scenes: 4,
             validation_frames: 60,
@@ -239,6 +247,7 @@ impl HoodTraining {
             ("train.two_materials", self.two_materials),
             ("train.open_front", self.open_front),
             ("train.replay", self.replay),
+            ("train.solver_states", self.solver_states),
         ] {
             if !(0.0..=1.0).contains(&v) {
                 return Err(TrainError::config(field, v, "between 0 and 1"));

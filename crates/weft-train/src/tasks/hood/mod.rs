@@ -217,6 +217,9 @@ struct Sample {
     /// The garment opened down the front (`[train] open_front`), and whether it is
     /// buttoned; `None`: the closed garment.
     open: Option<bool>,
+    /// The rollout goes on from weft-sim's implicit step, not the network's
+    /// (`[train] solver_states`).
+    solver_states: bool,
 }
 
 /// A rollout kept for a later item (`[train] replay`): the sample it belongs to, the
@@ -369,8 +372,14 @@ fn garment_on(
     .map_err(|e| TrainError::config("train.garments", kind, &e.to_string()))
 }
 
-/// The motion pool: each procedural kind (seeded) and each motion file.
-fn motion_pool(training: &HoodTraining, body: &BodyModel, seed: u64) -> Result<Vec<PoolMotion>> {
+/// The motion pool: each procedural kind (seeded) and each motion file, at `step_fps`
+/// frames per second (`[model] step_fps`: one network step a pool frame).
+fn motion_pool(
+    training: &HoodTraining,
+    body: &BodyModel,
+    seed: u64,
+    step_fps: f64,
+) -> Result<Vec<PoolMotion>> {
     let mut out = Vec::new();
     for (k, name) in training.motions.iter().enumerate() {
         let kind = MotionKind::parse(name).ok_or_else(|| {
@@ -384,6 +393,7 @@ fn motion_pool(training: &HoodTraining, body: &BodyModel, seed: u64) -> Result<V
         p.frames = training.motion_frames;
         p.seed = seed.wrapping_add(k as u64);
         let m = weft_motion::generate(&p)
+            .and_then(|m| weft_motion::resample(&m, step_fps))
             .map_err(|e| TrainError::config("train.motions", name, &e.to_string()))?;
         out.push(PoolMotion {
             poses: m.poses().to_vec(),
@@ -396,7 +406,7 @@ fn motion_pool(training: &HoodTraining, body: &BodyModel, seed: u64) -> Result<V
             TrainError::config("train.motion_files", path.display(), &e.to_string())
         })?;
         let options = weft_motion::MotionFileOptions::for_body(joints, None);
-        let m = weft_motion::load_motion(path, &options, Some(30.0))
+        let m = weft_motion::load_motion(path, &options, Some(step_fps))
             .map_err(|e| TrainError::config("train.motion_files", path.display(), &e.to_string()))?
             .motion;
         if m.poses().len() < training.max_rollout + 3 {
@@ -441,7 +451,7 @@ impl HoodTask {
         let mut rng = SplitMix64::new(seed ^ 0x4F0D_5EED);
         let train_shapes = shapes(training, training.shapes.max(1), &mut rng);
         let garments = garment_pool(training, &body, &train_shapes, seed)?;
-        let motions = motion_pool(training, &body, seed)?;
+        let motions = motion_pool(training, &body, seed, config.step_fps)?;
         let mut task = HoodTask {
             training: training.clone(),
             config: config.clone(),
@@ -526,6 +536,9 @@ impl HoodTask {
                 .map(|set| set[rng.below(set.len())])
                 .collect()
         });
+        // Drawn last, and only when asked, so runs without it keep their samples.
+        let solver_states =
+            self.training.solver_states > 0.0 && rng.unit() < self.training.solver_states;
         Sample {
             garment,
             motion,
@@ -535,6 +548,7 @@ impl HoodTask {
             noise_seed,
             centres,
             open,
+            solver_states,
         }
     }
 
@@ -906,7 +920,7 @@ impl TrainTask for HoodTask {
             // both solver terms), on one contact body, do not depend on the network, so
             // they run beside the forward pass: each uses the other's idle thread, and no
             // result depends on the threads.
-            let wants_target = terms.contains(&Term::Solver) || edges.is_some();
+            let wants_target = terms.contains(&Term::Solver) || edges.is_some() || s.solver_states;
             let (physics, out) = rayon::join(
                 || -> Result<_> {
                     let body = scene.contact_body(at)?;
@@ -923,9 +937,11 @@ impl TrainTask for HoodTask {
             );
             let x = next_positions(out?, &[&advance], &self.stats, &self.device)?;
             let n = graph.garment_nodes;
-            let (potential, target) = physics?;
+            let (potential, solved) = physics?;
             let x3 = x.clone().reshape([1, n, 3]);
-            let target = target.map(|target| positions_tensor(&target, &self.device));
+            let target = solved
+                .as_ref()
+                .map(|target| positions_tensor(target, &self.device));
             for (slot, term) in sums.iter_mut().zip(terms) {
                 let loss = match (term, &target, &edges) {
                     (Term::Solver, Some(target), _) => solver_loss(x.clone(), target.clone()),
@@ -964,7 +980,10 @@ impl TrainTask for HoodTask {
                     None => loss,
                 });
             }
-            let next = host_positions(&x)?;
+            let next = match solved {
+                Some(solved) if s.solver_states => solved,
+                _ => host_positions(&x)?,
+            };
             if settle {
                 prev = next.clone();
             } else {
@@ -1331,6 +1350,43 @@ mod tests {
     /// saved memory evaluates that item to the same bits (a resumed run repeats the
     /// uninterrupted one). A saved state of the wrong size is refused; without replay
     /// nothing is kept.
+    /// With `solver_states` the kept rollout is weft-sim's implicit step from the
+    /// item's start, not the network's.
+    #[test]
+    fn solver_states_go_on_from_the_implicit_step() {
+        for solver_states in [0.0, 1.0] {
+            let mut t = task_with(HoodTraining {
+                replay: 1.0,
+                noise: 0.0,
+                solver_states,
+                ..small()
+            });
+            let model = t.config.init(&t.device).unwrap();
+            t.losses(&model, 0, &[Term::Stretching]).unwrap();
+            let kept = t.live[0].clone().unwrap();
+            let s = t.sample(0, 1);
+            assert_eq!(kept.sample.solver_states, solver_states > 0.0);
+            let scene = t.scene(&s, 3).unwrap();
+            let start = scene.start(1, s.at_rest).unwrap();
+            let at = StepAt {
+                t: 1,
+                settle: false,
+                dt: scene.dt,
+                buttoned: true,
+            };
+            let body = scene.contact_body(at).unwrap();
+            let solved = scene
+                .implicit_step(start.as_ref(), at, body.as_ref())
+                .unwrap();
+            assert_eq!(kept.state.prev, start.cur);
+            assert_eq!(
+                kept.state.cur == solved,
+                solver_states > 0.0,
+                "solver_states {solver_states}"
+            );
+        }
+    }
+
     #[test]
     fn replayed_items_go_on_from_kept_rollouts_and_survive_a_checkpoint() {
         let training = HoodTraining {
