@@ -87,12 +87,6 @@ pub struct HoodTraining {
     /// starts skinned, so the network never trains on the states its own errors lead to
     /// in a long rollout, and a rollout that drifts keeps drifting (docs/hood.md).
     pub replay: f64,
-    /// Share of samples whose rollout goes on from weft-sim's implicit step instead of
-    /// the network's prediction (the network still takes every step's loss), and is
-    /// kept for replay so. The network's own rollouts swing less than the implicit
-    /// step's (docs/hood.md item 12), so without it it never sees the momentum a
-    /// garment builds over many frames. 0: the network's steps only (HOOD).
-    pub solver_states: f64,
     /// The most steps a kept rollout runs before its slot starts afresh.
     pub replay_frames: usize,
     /// Validation scenes (held-out shapes, motions and materials) and their frames.
@@ -150,7 +144,6 @@ impl HoodTraining {
             solver_weight: 0.0,
             solver_edge_weight: 0.0,
             replay: 0.0,
-            solver_states: 0.0,
             replay_frames: 60,
             validation_scenes: 4,
             validation_frames: 60,
@@ -247,7 +240,6 @@ impl HoodTraining {
             ("train.two_materials", self.two_materials),
             ("train.open_front", self.open_front),
             ("train.replay", self.replay),
-            ("train.solver_states", self.solver_states),
         ] {
             if !(0.0..=1.0).contains(&v) {
                 return Err(TrainError::config(field, v, "between 0 and 1"));

@@ -217,9 +217,6 @@ struct Sample {
     /// The garment opened down the front (`[train] open_front`), and whether it is
     /// buttoned; `None`: the closed garment.
     open: Option<bool>,
-    /// The rollout goes on from weft-sim's implicit step, not the network's
-    /// (`[train] solver_states`).
-    solver_states: bool,
 }
 
 /// A rollout kept for a later item (`[train] replay`): the sample it belongs to, the
@@ -536,9 +533,6 @@ impl HoodTask {
                 .map(|set| set[rng.below(set.len())])
                 .collect()
         });
-        // Drawn last, and only when asked, so runs without it keep their samples.
-        let solver_states =
-            self.training.solver_states > 0.0 && rng.unit() < self.training.solver_states;
         Sample {
             garment,
             motion,
@@ -548,7 +542,6 @@ impl HoodTask {
             noise_seed,
             centres,
             open,
-            solver_states,
         }
     }
 
@@ -920,7 +913,7 @@ impl TrainTask for HoodTask {
             // both solver terms), on one contact body, do not depend on the network, so
             // they run beside the forward pass: each uses the other's idle thread, and no
             // result depends on the threads.
-            let wants_target = terms.contains(&Term::Solver) || edges.is_some() || s.solver_states;
+            let wants_target = terms.contains(&Term::Solver) || edges.is_some();
             let (physics, out) = rayon::join(
                 || -> Result<_> {
                     let body = scene.contact_body(at)?;
@@ -937,11 +930,9 @@ impl TrainTask for HoodTask {
             );
             let x = next_positions(out?, &[&advance], &self.stats, &self.device)?;
             let n = graph.garment_nodes;
-            let (potential, solved) = physics?;
+            let (potential, target) = physics?;
             let x3 = x.clone().reshape([1, n, 3]);
-            let target = solved
-                .as_ref()
-                .map(|target| positions_tensor(target, &self.device));
+            let target = target.map(|target| positions_tensor(&target, &self.device));
             for (slot, term) in sums.iter_mut().zip(terms) {
                 let loss = match (term, &target, &edges) {
                     (Term::Solver, Some(target), _) => solver_loss(x.clone(), target.clone()),
@@ -980,10 +971,7 @@ impl TrainTask for HoodTask {
                     None => loss,
                 });
             }
-            let next = match solved {
-                Some(solved) if s.solver_states => solved,
-                _ => host_positions(&x)?,
-            };
+            let next = host_positions(&x)?;
             if settle {
                 prev = next.clone();
             } else {
@@ -1350,43 +1338,6 @@ mod tests {
     /// saved memory evaluates that item to the same bits (a resumed run repeats the
     /// uninterrupted one). A saved state of the wrong size is refused; without replay
     /// nothing is kept.
-    /// With `solver_states` the kept rollout is weft-sim's implicit step from the
-    /// item's start, not the network's.
-    #[test]
-    fn solver_states_go_on_from_the_implicit_step() {
-        for solver_states in [0.0, 1.0] {
-            let mut t = task_with(HoodTraining {
-                replay: 1.0,
-                noise: 0.0,
-                solver_states,
-                ..small()
-            });
-            let model = t.config.init(&t.device).unwrap();
-            t.losses(&model, 0, &[Term::Stretching]).unwrap();
-            let kept = t.live[0].clone().unwrap();
-            let s = t.sample(0, 1);
-            assert_eq!(kept.sample.solver_states, solver_states > 0.0);
-            let scene = t.scene(&s, 3).unwrap();
-            let start = scene.start(1, s.at_rest).unwrap();
-            let at = StepAt {
-                t: 1,
-                settle: false,
-                dt: scene.dt,
-                buttoned: true,
-            };
-            let body = scene.contact_body(at).unwrap();
-            let solved = scene
-                .implicit_step(start.as_ref(), at, body.as_ref())
-                .unwrap();
-            assert_eq!(kept.state.prev, start.cur);
-            assert_eq!(
-                kept.state.cur == solved,
-                solver_states > 0.0,
-                "solver_states {solver_states}"
-            );
-        }
-    }
-
     #[test]
     fn replayed_items_go_on_from_kept_rollouts_and_survive_a_checkpoint() {
         let training = HoodTraining {
