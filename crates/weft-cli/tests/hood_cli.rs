@@ -173,6 +173,11 @@ fn hood_trains_resumes_and_animates() {
         std::fs::read(&silk).unwrap()
     );
 
+    // A 120 fps motion: the network steps at its 1/30 s, every motion frame comes back.
+    let o = anim(&["--fps", "120"], &dir.join("fast.pc2"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("6 frames"), "{}", stdout(&o));
+
     // A two-material map, buttons and unbuttoning.
     let n = weft_mesh::load_mesh(&skirt).unwrap().mesh.vertex_count();
     let map = dir.join("map.npy");
