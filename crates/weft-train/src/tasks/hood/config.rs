@@ -87,12 +87,6 @@ pub struct HoodTraining {
     /// starts skinned, so the network never trains on the states its own errors lead to
     /// in a long rollout, and a rollout that drifts keeps drifting (docs/hood.md).
     pub replay: f64,
-    /// Probability that a kept rollout of a buttoned garment goes on unbuttoned: the
-    /// step `weft animate --unbutton-at` takes, from a state the buttons shaped. Fresh
-    /// open-front samples start from the skinned garment, where the buttons hold no
-    /// tension, so without it the network never sees the fronts released (docs/hood.md
-    /// item 13). 0: a rollout keeps its buttons.
-    pub unbutton_replay: f64,
     /// The most steps a kept rollout runs before its slot starts afresh.
     pub replay_frames: usize,
     /// Validation scenes (held-out shapes, motions and materials) and their frames.
@@ -150,7 +144,6 @@ impl HoodTraining {
             solver_weight: 0.0,
             solver_edge_weight: 0.0,
             replay: 0.0,
-            unbutton_replay: 0.0,
             replay_frames: 60,
             validation_scenes: 4,
             validation_frames: 60,
@@ -247,7 +240,6 @@ impl HoodTraining {
             ("train.two_materials", self.two_materials),
             ("train.open_front", self.open_front),
             ("train.replay", self.replay),
-            ("train.unbutton_replay", self.unbutton_replay),
         ] {
             if !(0.0..=1.0).contains(&v) {
                 return Err(TrainError::config(field, v, "between 0 and 1"));

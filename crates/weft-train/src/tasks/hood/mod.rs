@@ -693,9 +693,6 @@ struct SavedLive {
     age: usize,
     prev: Vec<u64>,
     cur: Vec<u64>,
-    /// A buttoned sample gone on unbuttoned (`[train] unbutton_replay`).
-    #[serde(default)]
-    unbuttoned: bool,
 }
 
 impl HoodTask {
@@ -724,13 +721,6 @@ impl HoodTask {
             live.sample.first = live.frame - 1;
             live.sample.at_rest = false;
             live.sample.noise_seed = rng.next_u64();
-            // Drawn last, and only when asked, so runs without it keep their samples.
-            if live.sample.open == Some(true)
-                && self.training.unbutton_replay > 0.0
-                && rng.unit() < self.training.unbutton_replay
-            {
-                live.sample.open = Some(false);
-            }
             live
         })
     }
@@ -774,16 +764,7 @@ impl HoodTask {
                 saved.rollout, self.training.max_rollout
             ));
         }
-        let mut sample = self.sample(saved.item, saved.rollout);
-        if saved.unbuttoned {
-            if sample.open != Some(true) {
-                return Err(format!(
-                    "a kept rollout unbuttoned from item {}, whose garment has no buttons",
-                    saved.item
-                ));
-            }
-            sample.open = Some(false);
-        }
+        let sample = self.sample(saved.item, saved.rollout);
         let (mesh, _) = self.garments[sample.garment].variant(sample.open.is_some());
         let n = mesh.vertex_count();
         let frames = self.motions[sample.motion].poses.len();
@@ -1136,8 +1117,6 @@ impl TrainTask for HoodTask {
                         age: l.age,
                         prev: bits(&l.state.prev),
                         cur: bits(&l.state.cur),
-                        unbuttoned: l.sample.open == Some(false)
-                            && self.sample(l.origin.0, l.origin.1).open == Some(true),
                     })
                 })
                 .collect(),
@@ -1284,41 +1263,6 @@ mod tests {
         let closed = task(true);
         assert!(closed.garments[0].open.is_none());
         assert_eq!(closed.sample(3, 1).open, None);
-    }
-
-    /// With `unbutton_replay`, a kept buttoned rollout goes on without its buttons,
-    /// and a checkpoint keeps it so.
-    #[test]
-    fn buttoned_rollouts_go_on_unbuttoned_and_survive_a_checkpoint() {
-        let training = HoodTraining {
-            open_front: 1.0,
-            replay: 1.0,
-            unbutton_replay: 1.0,
-            motion_frames: 30,
-            ..small()
-        };
-        let mut t = task_with(training.clone());
-        let model = t.config.init(&t.device).unwrap();
-        let terms = [Term::Stretching];
-        let open = |t: &HoodTask| -> Vec<Option<bool>> {
-            t.live
-                .iter()
-                .map(|l| l.as_ref().unwrap().sample.open)
-                .collect()
-        };
-        for item in 0..REPLAY_SLOTS {
-            t.losses(&model, item, &terms).unwrap();
-        }
-        assert!(open(&t).contains(&Some(true)), "{:?}", open(&t));
-        for item in 0..REPLAY_SLOTS {
-            t.losses(&model, 1000 + item, &terms).unwrap();
-        }
-        assert_eq!(open(&t), vec![Some(false); REPLAY_SLOTS]);
-        let memory = t.memory().unwrap();
-        let mut resumed = task_with(training);
-        resumed.restore_memory(memory.clone()).unwrap();
-        assert_eq!(open(&resumed), vec![Some(false); REPLAY_SLOTS]);
-        assert_eq!(resumed.memory(), Some(memory));
     }
 
     fn scalar(t: Tensor<1>) -> f64 {
