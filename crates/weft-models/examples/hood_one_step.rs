@@ -1,0 +1,176 @@
+//! How far one HOOD step is from the step its objective asks for, from given states.
+//!
+//! ```sh
+//! cargo run --release -p weft-models --example hood_one_step -- RUN G.obj MOTION.npz DIR
+//! ```
+//!
+//! `DIR` holds a rollout of garment `G.obj` on `MOTION` as an OBJ sequence (`weft animate
+//! --format obj`, or `weft simulate --obj`'s `obj/`). From each of its frames 5 onwards
+//! the run's network takes one step, and weft-sim's implicit Euler takes the step of the
+//! same incremental potential the network is trained on (`Scene::implicit_step`). Printed:
+//! the hem's motion relative to the hips (mm a step) for the network, the implicit step
+//! and inertia alone (`x + v`); each step's acceleration over inertia (mm a step²) and
+//! how much of the implicit one the network's carries (its projection); and the part of
+//! the accelerations that is a vertex's own, not its neighbours' (jitter, not sag).
+//! docs/hood.md item 13 reads these for the network's own rollouts and the simulator's.
+
+use std::error::Error;
+use std::path::{Path, PathBuf};
+
+use weft_models::deformer::Clip;
+use weft_models::hood::rollout::step_batch;
+use weft_models::hood::{HoodPredictor, StateRef, StepAt};
+
+type P = [f64; 3];
+
+fn sub(a: P, b: P) -> P {
+    std::array::from_fn(|k| a[k] - b[k])
+}
+
+fn norm(a: P) -> f64 {
+    a.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+fn dot(a: P, b: P) -> f64 {
+    (0..3).map(|k| a[k] * b[k]).sum()
+}
+
+fn mean(x: &[P], of: &[usize]) -> P {
+    let n = of.len().max(1) as f64;
+    std::array::from_fn(|k| of.iter().map(|&i| x[i][k]).sum::<f64>() / n)
+}
+
+/// Sums over the steps of one quantity for the network, the implicit step and inertia.
+#[derive(Default)]
+struct Sums {
+    hem: [f64; 3],
+    accel: [f64; 2],
+    own: [f64; 2],
+    projection: [f64; 2],
+    hem_count: f64,
+    free_count: f64,
+}
+
+fn main() -> Result<(), Box<dyn Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [run, garment, motion, dir] = args.as_slice() else {
+        return Err("usage: hood_one_step RUN G.obj MOTION.npz|.bvh DIR (an OBJ sequence)".into());
+    };
+    let body = weft_body::BodyModel::load_or_default(None)?;
+    let g = weft_mesh::load_mesh(Path::new(garment))?.mesh;
+    let joints = weft_motion::body_rest_joints(&body, &[])?;
+    let options = weft_motion::MotionFileOptions::for_body(joints, None);
+    let m = weft_motion::load_motion(Path::new(motion), &options, None)?.motion;
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .map(|e| e.map(|e| e.path()))
+        .collect::<Result<_, _>>()?;
+    files.retain(|p| p.extension().is_some_and(|e| e == "obj"));
+    files.sort();
+    let n = files.len().min(m.frame_count());
+    if n < 7 {
+        return Err(format!(
+            "{dir}: {n} frames of the rollout and the motion; expected at least 7"
+        )
+        .into());
+    }
+    let xs = files[..n]
+        .iter()
+        .map(|f| weft_mesh::load_mesh(f).map(|r| r.mesh.positions))
+        .collect::<Result<Vec<_>, _>>()?;
+    let clip = Clip {
+        betas: &[],
+        poses: &m.poses()[..n],
+        trans: &m.trans()[..n],
+        fps: m.fps(),
+    };
+    let hood = HoodPredictor::load(Path::new(run))?;
+    let scene = hood.scene(&g, &body, &clip)?;
+    if scene.steps_per_frame != 1.0 {
+        return Err(format!(
+            "{run} steps at {} fps, the motion is at {}",
+            hood.config.step_fps,
+            m.fps()
+        )
+        .into());
+    }
+    // The hem: the lowest 15 % of the garment; the hips: body vertices at its height.
+    let (lo, hi) = g
+        .positions
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p[1]), b.max(p[1])));
+    let hem: Vec<usize> = (0..g.vertex_count())
+        .filter(|&i| g.positions[i][1] < lo + 0.15 * (hi - lo))
+        .collect();
+    let hips: Vec<usize> = (0..scene.body[0].len())
+        .filter(|&i| (lo..hi).contains(&scene.body[0][i][1]))
+        .collect();
+    let mut neighbours = vec![Vec::new(); g.vertex_count()];
+    for f in &g.faces {
+        for k in 0..3 {
+            let (a, b) = (f[k] as usize, f[(k + 1) % 3] as usize);
+            if !neighbours[a].contains(&b) {
+                neighbours[a].push(b);
+                neighbours[b].push(a);
+            }
+        }
+    }
+    let device = weft_nn::backend::cpu();
+    let mut s = Sums::default();
+    for t in 5..n - 1 {
+        let state = StateRef {
+            prev: &xs[t - 1],
+            cur: &xs[t],
+        };
+        let at = StepAt {
+            t,
+            settle: false,
+            dt: scene.dt,
+            buttoned: true,
+        };
+        let (graph, advance) = scene.step(state, at, &hood.config)?;
+        let net = step_batch(&hood.model, &hood.stats, &[(&graph, &advance)], &device)?.remove(0);
+        let implicit = scene.implicit_step(state, at, scene.contact_body(at)?.as_ref())?;
+        let inertia = advance.inertial_target();
+        let hips_moved = sub(mean(&scene.body[t + 1], &hips), mean(&scene.body[t], &hips));
+        for &i in &hem {
+            for (k, x) in [&net, &implicit, &inertia].into_iter().enumerate() {
+                let d = sub(sub(x[i], xs[t][i]), hips_moved);
+                s.hem[k] += d[0].hypot(d[2]);
+            }
+            s.hem_count += 1.0;
+        }
+        let accel =
+            |x: &[P]| -> Vec<P> { x.iter().zip(&inertia).map(|(a, b)| sub(*a, *b)).collect() };
+        let (a_net, a_imp) = (accel(&net), accel(&implicit));
+        for i in
+            (0..g.vertex_count()).filter(|&i| !scene.garment.pinned[i] && !neighbours[i].is_empty())
+        {
+            for (k, a) in [&a_net, &a_imp].into_iter().enumerate() {
+                s.accel[k] += norm(a[i]);
+                s.own[k] += norm(sub(a[i], mean(a, &neighbours[i])));
+            }
+            s.projection[0] += dot(a_net[i], a_imp[i]);
+            s.projection[1] += dot(a_imp[i], a_imp[i]);
+            s.free_count += 1.0;
+        }
+    }
+    let mm = |x: f64, n: f64| 1000.0 * x / n;
+    println!(
+        "hem relative to the hips, mm a step: network {:.2}, implicit step {:.2}, inertia alone {:.2}",
+        mm(s.hem[0], s.hem_count),
+        mm(s.hem[1], s.hem_count),
+        mm(s.hem[2], s.hem_count)
+    );
+    println!(
+        "acceleration over inertia, mm a step²: network {:.2}, implicit step {:.2}; the network's projection on it {:.2}",
+        mm(s.accel[0], s.free_count),
+        mm(s.accel[1], s.free_count),
+        s.projection[0] / s.projection[1].max(1e-30)
+    );
+    println!(
+        "of which a vertex's own (less its neighbours' mean), mm a step²: network {:.2}, implicit step {:.2}",
+        mm(s.own[0], s.free_count),
+        mm(s.own[1], s.free_count)
+    );
+    Ok(())
+}
