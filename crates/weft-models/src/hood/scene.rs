@@ -145,10 +145,12 @@ pub struct Scene {
     swept_contacts: bool,
 }
 
-/// `clip`'s poses, root translations and frame rate resampled to `steps` steps over its
-/// duration (weft-motion's resampling: a frame that falls on one of the clip's is that
-/// frame); `None` when that is a step a frame.
+/// A motion's poses, root translations and frame rate.
 type Resampled = (Vec<Pose>, Vec<[f32; 3]>, f64);
+
+/// `clip` resampled to `steps` steps over its duration (weft-motion's resampling: a
+/// frame that falls on one of the clip's is that frame); `None` when that is a step a
+/// frame.
 fn at_steps(clip: &Clip, steps: usize) -> Result<Option<Resampled>, ModelError> {
     let intervals = clip.len() - 1;
     if steps == intervals {
