@@ -21,19 +21,9 @@ use weft_models::deformer::Clip;
 use weft_models::hood::rollout::step_batch;
 use weft_models::hood::{HoodPredictor, StateRef, StepAt};
 
+use weft_mesh::vec3::{dot, norm, sub};
+
 type P = [f64; 3];
-
-fn sub(a: P, b: P) -> P {
-    std::array::from_fn(|k| a[k] - b[k])
-}
-
-fn norm(a: P) -> f64 {
-    a.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-fn dot(a: P, b: P) -> f64 {
-    (0..3).map(|k| a[k] * b[k]).sum()
-}
 
 fn mean(x: &[P], of: &[usize]) -> P {
     let n = of.len().max(1) as f64;
@@ -85,7 +75,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     };
     let hood = HoodPredictor::load(Path::new(run))?;
     let scene = hood.scene(&g, &body, &clip)?;
-    if scene.steps_per_frame != 1.0 {
+    if scene.steps_per_frame() != 1.0 {
         return Err(format!(
             "{run} steps at {} fps, the motion is at {}",
             hood.config.step_fps,

@@ -6,6 +6,7 @@
 
 use burn::tensor::{Device, Tensor, TensorData};
 use weft_garment::onbody::push_out;
+use weft_mesh::vec3;
 use weft_sim::{project_contacts, FaceContact, StrainBounds, StrainLimit};
 
 use super::config::HoodConfig;
@@ -206,7 +207,7 @@ fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Opt
         if !b.iter().all(|x| x.is_finite()) {
             return Some(format!("vertex {i} has a non-finite position"));
         }
-        let d = weft_mesh::vec3::dist(*a, *b) / dt;
+        let d = vec3::dist(*a, *b) / dt;
         if d > fastest.0 {
             fastest = (d, i);
         }
@@ -365,7 +366,7 @@ pub fn roll_out(
     let buttoned = |k: usize, t: usize| {
         options
             .unbutton_at
-            .is_none_or(|f| (t as f64) < f as f64 * scenes[k].steps_per_frame - 1e-9)
+            .is_none_or(|f| (t as f64) < f as f64 * scenes[k].steps_per_frame() - 1e-9)
     };
     let mut starts = Vec::with_capacity(scenes.len());
     for s in scenes {
@@ -458,7 +459,7 @@ pub fn roll_out(
     Ok(out
         .into_iter()
         .zip(scenes)
-        .map(|(r, s)| r.motion_frames(s.steps_per_frame, s.motion_frames))
+        .map(|(r, s)| r.motion_frames(s.steps_per_frame(), s.motion_frames))
         .collect())
 }
 
@@ -493,7 +494,7 @@ impl Rollout {
             out.push(
                 a.iter()
                     .zip(b)
-                    .map(|(a, b)| std::array::from_fn(|k| a[k] + w * (b[k] - a[k])))
+                    .map(|(&a, &b)| vec3::add_scaled(a, vec3::sub(b, a), w))
                     .collect(),
             );
         }

@@ -133,11 +133,8 @@ pub struct Scene {
     pub skinned: Vec<Vec<[f64; 3]>>,
     /// Seconds per frame.
     pub dt: f64,
-    /// Frames of the scene per frame of the motion it was made from: its frames are the
-    /// motion resampled to [`HoodConfig::steps`] steps over its duration (1: the
-    /// motion's own frames).
-    pub steps_per_frame: f64,
-    /// Frames of the motion the scene was made from.
+    /// Frames of the motion the scene was made from: the scene's are that motion
+    /// resampled to [`HoodConfig::steps`] steps over its duration.
     pub motion_frames: usize,
     /// The body surface at rest, rebuilt at each step's pose ([`Scene::posed_body`]).
     rest_body: PosedBody,
@@ -200,7 +197,6 @@ impl Scene {
         }
         let motion_frames = clip.len();
         let steps = config.steps(motion_frames, clip.fps);
-        let steps_per_frame = steps as f64 / (motion_frames - 1) as f64;
         let fine = at_steps(clip, steps)?;
         let clip = match &fine {
             Some((poses, trans, fps)) => &Clip {
@@ -254,7 +250,6 @@ impl Scene {
             },
             skinned,
             dt: 1.0 / clip.fps,
-            steps_per_frame,
             motion_frames,
             rest_body: rest_surface,
             swept_contacts: config.swept_contacts,
@@ -264,6 +259,12 @@ impl Scene {
     /// Frames of the clip.
     pub fn frames(&self) -> usize {
         self.body.len()
+    }
+
+    /// Network steps per frame of the motion the scene was made from (1: the motion's
+    /// own frames).
+    pub fn steps_per_frame(&self) -> f64 {
+        (self.frames() - 1) as f64 / (self.motion_frames - 1) as f64
     }
 
     /// The skinned garment at frame `t`: where the pinned vertices go in a step that
