@@ -113,6 +113,11 @@ pub enum Term {
     /// The distance to the implicit step's edge vectors (cm², mean over the mesh edges),
     /// see [`HoodTraining::solver_edge_weight`].
     SolverEdges,
+    /// What [`Term::Solver`] would be if the network added nothing to inertia (`x_t +
+    /// v_t`, pins at their targets): logged beside it with weight 0 (it does not depend
+    /// on the network), so `solver / solver_coast` is the share of the implicit step's
+    /// correction the network misses (docs/hood.md item 14).
+    SolverCoast,
 }
 
 impl Term {
@@ -140,6 +145,7 @@ impl LossTerm for Term {
             Term::Buttons => "buttons",
             Term::Solver => "solver",
             Term::SolverEdges => "solver_edges",
+            Term::SolverCoast => "solver_coast",
         }
     }
 }
@@ -856,6 +862,9 @@ impl TrainTask for HoodTask {
         if self.training.solver_edge_weight > 0.0 {
             terms.push((Term::SolverEdges, self.training.solver_edge_weight));
         }
+        if self.training.solver_weight > 0.0 || self.training.solver_edge_weight > 0.0 {
+            terms.push((Term::SolverCoast, 0.0));
+        }
         terms
     }
 
@@ -913,7 +922,10 @@ impl TrainTask for HoodTask {
             // both solver terms), on one contact body, do not depend on the network, so
             // they run beside the forward pass: each uses the other's idle thread, and no
             // result depends on the threads.
-            let wants_target = terms.contains(&Term::Solver) || edges.is_some();
+            let wants_target = terms
+                .iter()
+                .any(|t| matches!(t, Term::Solver | Term::SolverCoast))
+                || edges.is_some();
             let (physics, out) = rayon::join(
                 || -> Result<_> {
                     let body = scene.contact_body(at)?;
@@ -939,6 +951,10 @@ impl TrainTask for HoodTask {
                     (Term::SolverEdges, Some(target), Some(edges)) => {
                         solver_edge_loss(x.clone(), target.clone(), edges)
                     }
+                    (Term::SolverCoast, Some(target), _) => solver_loss(
+                        positions_tensor(&advance.inertial_target(), &self.device),
+                        target.clone(),
+                    ),
                     _ => {
                         let index = Term::POTENTIAL.iter().position(|a| a == term).unwrap_or(0);
                         let energy = match potential.get(index) {
@@ -1331,6 +1347,35 @@ mod tests {
         let at = names.iter().position(|t| *t == Term::SolverEdges).unwrap();
         let edge = scalar(losses[at].clone());
         assert!(edge.is_finite() && edge > 0.0, "{edge}");
+    }
+
+    /// `solver_coast` is logged with weight 0 beside the solver terms, and an untrained
+    /// network (its decoder's last layer zero) coasts: its `solver` term is exactly
+    /// that, and both are above zero. Without solver terms it is not logged.
+    #[test]
+    fn the_coasting_distance_is_logged_beside_the_solver_term() {
+        let mut t = task_with(small());
+        let terms = t.terms(&Stage::default());
+        assert!(terms.contains(&(Term::SolverCoast, 0.0)), "{terms:?}");
+        let potential_only = task_with(HoodTraining {
+            solver_weight: 0.0,
+            solver_edge_weight: 0.0,
+            ..small()
+        });
+        assert!(!potential_only
+            .terms(&Stage::default())
+            .iter()
+            .any(|(t, _)| *t == Term::SolverCoast));
+        let model = t.config.init(&t.device).unwrap();
+        let names: Vec<Term> = terms.iter().map(|(t, _)| *t).collect();
+        let losses = t.losses(&model, 0, &names).unwrap();
+        let value = |term| scalar(losses[names.iter().position(|t| *t == term).unwrap()].clone());
+        let (solver, coast) = (value(Term::Solver), value(Term::SolverCoast));
+        assert!(coast > 0.0, "{coast}");
+        assert!(
+            (solver - coast).abs() <= 1e-4 * coast,
+            "{solver} against {coast}"
+        );
     }
 
     /// `[train] replay`: once every slot holds a rollout, an item that draws a replay
