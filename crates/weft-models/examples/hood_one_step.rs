@@ -25,9 +25,9 @@ use weft_mesh::vec3::{dot, norm, sub};
 
 type P = [f64; 3];
 
-fn mean(x: &[P], of: &[usize]) -> P {
+fn mean(x: &[P], of: &[u32]) -> P {
     let n = of.len().max(1) as f64;
-    std::array::from_fn(|k| of.iter().map(|&i| x[i][k]).sum::<f64>() / n)
+    std::array::from_fn(|k| of.iter().map(|&i| x[i as usize][k]).sum::<f64>() / n)
 }
 
 /// Sums over the steps of one quantity for the network, the implicit step and inertia.
@@ -91,19 +91,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let hem: Vec<usize> = (0..g.vertex_count())
         .filter(|&i| g.positions[i][1] < lo + 0.15 * (hi - lo))
         .collect();
-    let hips: Vec<usize> = (0..scene.body[0].len())
-        .filter(|&i| (lo..hi).contains(&scene.body[0][i][1]))
+    let hips: Vec<u32> = (0..scene.body[0].len() as u32)
+        .filter(|&i| (lo..hi).contains(&scene.body[0][i as usize][1]))
         .collect();
-    let mut neighbours = vec![Vec::new(); g.vertex_count()];
-    for f in &g.faces {
-        for k in 0..3 {
-            let (a, b) = (f[k] as usize, f[(k + 1) % 3] as usize);
-            if !neighbours[a].contains(&b) {
-                neighbours[a].push(b);
-                neighbours[b].push(a);
-            }
-        }
-    }
+    let mesh_graph = g.graph();
     let device = weft_nn::backend::cpu();
     let mut s = Sums::default();
     for t in 5..n - 1 {
@@ -133,11 +124,11 @@ fn main() -> Result<(), Box<dyn Error>> {
             |x: &[P]| -> Vec<P> { x.iter().zip(&inertia).map(|(a, b)| sub(*a, *b)).collect() };
         let (a_net, a_imp) = (accel(&net), accel(&implicit));
         for i in
-            (0..g.vertex_count()).filter(|&i| !scene.garment.pinned[i] && !neighbours[i].is_empty())
+            (0..g.vertex_count()).filter(|&i| !scene.garment.pinned[i] && mesh_graph.degree(i) > 0)
         {
             for (k, a) in [&a_net, &a_imp].into_iter().enumerate() {
                 s.accel[k] += norm(a[i]);
-                s.own[k] += norm(sub(a[i], mean(a, &neighbours[i])));
+                s.own[k] += norm(sub(a[i], mean(a, mesh_graph.neighbors(i))));
             }
             s.projection[0] += dot(a_net[i], a_imp[i]);
             s.projection[1] += dot(a_imp[i], a_imp[i]);
