@@ -137,8 +137,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
                 .iter()
                 .map(|f| f.iter().map(|p| p.map(|x| x as f32)).collect())
                 .collect();
-            let corrections =
-                hood.options.strain_limit.any() || hood.options.contact_margin.is_some();
+            let corrections = hood.options.over(&hood.config).corrects();
             let corrections = corrections.then_some(rollout.corrections);
             (Box::new(hood), frames, rollout.stopped, corrections)
         } else {

@@ -63,6 +63,10 @@ pub struct EvalArgs {
     /// many millimetres onto its surface at that distance (`weft animate --push-out`).
     #[arg(long, value_name = "MM")]
     push_out: Option<f64>,
+    /// HOOD runs: leave out the step projection a run was trained with (`weft animate
+    /// --no-projection`).
+    #[arg(long)]
+    no_projection: bool,
     /// Character datasets only: move the root of every pose by this (x,y,z, metres), the
     /// translation test of seed 001 Fig. 3.23.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
@@ -93,7 +97,12 @@ fn correction_flags(args: &EvalArgs) -> [(&'static str, Option<f64>); 3] {
 /// refused unless one of the runs is a HOOD run (the only kind that takes them).
 fn hood_options(args: &EvalArgs) -> Result<RolloutOptions> {
     use super::hood_args::{push_out, strain_bounds};
-    if let Some((flag, _)) = correction_flags(args).iter().find(|(_, v)| v.is_some()) {
+    let given = correction_flags(args)
+        .iter()
+        .find(|(_, v)| v.is_some())
+        .map(|(flag, _)| *flag)
+        .or(args.no_projection.then_some("--no-projection"));
+    if let Some(flag) = given {
         let hood = args.runs.iter().any(|r| {
             read_run_config(r).is_ok_and(|(h, _)| h.model == weft_models::ModelKind::Hood)
         });
@@ -104,6 +113,7 @@ fn hood_options(args: &EvalArgs) -> Result<RolloutOptions> {
     Ok(RolloutOptions {
         strain_limit: strain_bounds(args.strain_limit, args.compression_limit)?,
         contact_margin: args.push_out.map(push_out).transpose()?,
+        projection: !args.no_projection,
         ..RolloutOptions::default()
     })
 }
@@ -235,6 +245,9 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                     if let Some(v) = value {
                         o.command += &format!(" {flag} {v}");
                     }
+                }
+                if args.no_projection {
+                    o.command += " --no-projection";
                 }
                 evaluate_run(run, data, &o, &hood, args.json)?
             }

@@ -1,7 +1,7 @@
 //! `weft animate`'s choices for a HOOD run, which picks them at run time: what the
 //! garment is made of (one material, or a per-vertex map over a list of them), button
-//! vertex pairs, the frame at which they come undone, and run-time strain limiting
-//! (stretch and compression).
+//! vertex pairs, the frame at which they come undone, run-time strain limiting
+//! (stretch and compression), and whether the run's own step projection applies.
 
 use std::path::PathBuf;
 
@@ -38,6 +38,11 @@ pub struct HoodArgs {
     /// default.
     #[arg(long, value_name = "PERCENT")]
     compression_limit: Option<f64>,
+    /// HOOD: leave out the step projection the run was trained with (its `[model]
+    /// project_*` bounds, which a rollout applies by default): the network's steps with
+    /// only the corrections these flags ask for.
+    #[arg(long)]
+    no_projection: bool,
 }
 
 impl HoodArgs {
@@ -51,6 +56,8 @@ impl HoodArgs {
             Some("--strain-limit")
         } else if self.compression_limit.is_some() {
             Some("--compression-limit")
+        } else if self.no_projection {
+            Some("--no-projection")
         } else {
             None
         }
@@ -86,6 +93,7 @@ impl HoodArgs {
         }
         hood.options.unbutton_at = self.unbutton_at;
         hood.options.strain_limit = strain_bounds(self.strain_limit, self.compression_limit)?;
+        hood.options.projection = !self.no_projection;
         Ok(())
     }
 }

@@ -78,6 +78,24 @@ pub struct HoodConfig {
     /// learnt (docs/hood.md item 13). Training resamples its motions to this rate.
     #[config(default = 30.0)]
     pub step_fps: f64,
+    /// The step's projection, stretch bound (not in HOOD; docs/hood.md item 15): after
+    /// the network's step, edges longer than `1 + project_stretch` rest lengths are
+    /// shortened to it, as `weft animate --strain-limit` does. With any `project_*`
+    /// field set the projection is part of the model: training takes the potential of
+    /// the projected garment (its gradient passed straight through to the network's
+    /// step) and goes on from it, and a rollout projects every step unless told
+    /// otherwise. `None` (HOOD, runs written before it): no stretch bound.
+    #[config(default = "None")]
+    pub project_stretch: Option<f64>,
+    /// The step's projection, compression bound: edges shorter than
+    /// `1 − project_compression` rest lengths are lengthened to it (`--compression-limit`).
+    #[config(default = "None")]
+    pub project_compression: Option<f64>,
+    /// The step's projection, contact margin (m): the garment is moved out of the body
+    /// to this distance against the collision term's contact planes, with friction
+    /// (`--push-out`).
+    #[config(default = "None")]
+    pub project_margin: Option<f64>,
 }
 
 /// A parsed schedule: for each message-passing step, the mesh levels it reads.
@@ -153,7 +171,25 @@ impl HoodConfig {
                 self.body_radius
             )));
         }
+        for (name, value) in [
+            ("project_stretch", self.project_stretch),
+            ("project_compression", self.project_compression),
+            ("project_margin", self.project_margin),
+        ] {
+            if let Some(v) = value.filter(|v| !(v.is_finite() && *v >= 0.0 && *v < 1.0)) {
+                return Err(ModelError::Config(format!(
+                    "{name} = {v}: expected a fraction of the rest length (a margin in metres) >= 0 and below 1"
+                )));
+            }
+        }
         self.parse_schedule().map(|_| ())
+    }
+
+    /// Whether the model's step ends in a projection (any `project_*` field set).
+    pub fn projects(&self) -> bool {
+        self.project_stretch.is_some()
+            || self.project_compression.is_some()
+            || self.project_margin.is_some()
     }
 
     /// An MLP of this config: hidden layers of the latent width, LayerNorm on the output
@@ -336,5 +372,22 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("body_radius"), "{e}");
+        let cpu = HoodConfig::preset("cpu").unwrap();
+        assert!(!cpu.projects());
+        for bad in [-0.1, 1.0, f64::NAN] {
+            let e = HoodConfig {
+                project_margin: Some(bad),
+                ..cpu.clone()
+            }
+            .validate()
+            .unwrap_err()
+            .to_string();
+            assert!(e.contains("project_margin"), "{e}");
+        }
+        assert!(HoodConfig {
+            project_stretch: Some(0.05),
+            ..cpu
+        }
+        .projects());
     }
 }

@@ -30,8 +30,8 @@ pub use garment::HoodGarment;
 pub use model::{Hood, HoodBatch, HoodInput, InferHood};
 pub use predictor::HoodPredictor;
 pub use rollout::{
-    roll_out, Advance, Corrections, Rollout, RolloutOptions, CONTACT_ROUNDS, ROUND_SWEEPS,
-    STRAIN_LIMIT_SWEEPS,
+    roll_out, Advance, Corrections, Corrector, Rollout, RolloutOptions, CONTACT_ROUNDS,
+    ROUND_SWEEPS, STRAIN_LIMIT_SWEEPS,
 };
 pub use scene::{Materials, Scene, State, StateRef, StepAt, StepBodies};
 pub use stats::{HoodStats, HoodStatsFit, STATS_FILE};

@@ -131,10 +131,11 @@ impl HoodPredictor {
 }
 
 impl Deformer for HoodPredictor {
-    /// "HOOD", with the run-time corrections when they are on (they change the frames,
-    /// so a table must not mistake them for the network's own).
+    /// "HOOD", with the run-time corrections when they are on, the run's own step
+    /// projection included (they change the frames, so a table must not mistake them for
+    /// the network's own).
     fn name(&self) -> String {
-        let o = &self.options;
+        let o = &self.options.over(&self.config);
         // The flags' own units, rounded so that 0.07 reads 7, not 7.000000000000001.
         let shown = |x: f64| (x * 1e6).round() / 1e6;
         let mut on = Vec::new();

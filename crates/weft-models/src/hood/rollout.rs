@@ -109,6 +109,11 @@ pub struct RolloutOptions {
     /// free vertices still inside the body or nearer to it then move to its closest
     /// point plus this distance. `None`: off (HOOD).
     pub contact_margin: Option<f64>,
+    /// Whether a bound left unset above takes the model's own step projection
+    /// ([`HoodConfig::project_stretch`] and its siblings; on by default, so a run
+    /// trained with a projection rolls out with it). Off (`--no-projection`): only the
+    /// bounds set here.
+    pub projection: bool,
 }
 
 impl Default for RolloutOptions {
@@ -118,7 +123,32 @@ impl Default for RolloutOptions {
             max_speed: 50.0,
             strain_limit: StrainBounds::default(),
             contact_margin: None,
+            projection: true,
         }
+    }
+}
+
+impl RolloutOptions {
+    /// These options over the step projection of a model of `config`: a bound set here
+    /// wins, one left unset takes the model's (while [`RolloutOptions::projection`]).
+    pub fn over(&self, config: &HoodConfig) -> Self {
+        if !self.projection {
+            return *self;
+        }
+        let bounds = &self.strain_limit;
+        RolloutOptions {
+            strain_limit: StrainBounds {
+                stretch: bounds.stretch.or(config.project_stretch),
+                compression: bounds.compression.or(config.project_compression),
+            },
+            contact_margin: self.contact_margin.or(config.project_margin),
+            ..*self
+        }
+    }
+
+    /// Whether any correction runs after a step.
+    pub fn corrects(&self) -> bool {
+        self.strain_limit.any() || self.contact_margin.is_some()
     }
 }
 
@@ -220,8 +250,10 @@ fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Opt
     })
 }
 
-/// `options`' run-time corrections of one scene's steps (its strain limiter built once).
-struct Corrector<'a> {
+/// `options`' run-time corrections of one scene's steps (its strain limiter built once):
+/// what a rollout does after each network step, and what training does after each step
+/// of a model whose step ends in a projection.
+pub struct Corrector<'a> {
     scene: &'a Scene,
     limiter: Option<StrainLimit>,
     faces: Option<FaceContact>,
@@ -230,7 +262,7 @@ struct Corrector<'a> {
 
 impl<'a> Corrector<'a> {
     /// The corrections `options` asks for on `scene`'s garment.
-    fn new(scene: &'a Scene, options: &RolloutOptions) -> Result<Self, ModelError> {
+    pub fn new(scene: &'a Scene, options: &RolloutOptions) -> Result<Self, ModelError> {
         let g = &scene.garment;
         let limiter = match options.strain_limit.any() {
             true => Some(
@@ -262,7 +294,7 @@ impl<'a> Corrector<'a> {
     /// of the two (and of the face contacts) and a last limit, then the face contacts
     /// ([`FACE_PASSES`]) and the push-out of what is still inside. The rollout goes on
     /// from the corrected positions.
-    fn correct(
+    pub fn correct(
         &self,
         cur: &[[f64; 3]],
         at: StepAt,
@@ -361,6 +393,7 @@ pub fn roll_out(
     options: &RolloutOptions,
     device: &Device,
 ) -> Result<Vec<Rollout>, ModelError> {
+    let options = &options.over(config);
     // Whether the step that ends at frame `t` of scene `k` is buttoned: `unbutton_at`
     // counts the motion's frames, the first step that ends at or after it is not.
     let buttoned = |k: usize, t: usize| {
@@ -771,5 +804,29 @@ mod tests {
             assert!(max_strain(x) < 0.16, "{}", max_strain(x));
         }
         assert!(inside(&last(&both)) * 10 < inside(&last(&plain)));
+
+        // A model whose step ends in a projection (`[model] project_*`) rolls out with it
+        // unless told not to, and a bound given at run time wins over the model's.
+        let projecting = HoodConfig {
+            project_stretch: Some(0.1),
+            ..config.clone()
+        };
+        let run_on = |options: RolloutOptions| {
+            roll_out(&model, &stats, &projecting, &[&scene], &options, &device)
+                .unwrap()
+                .remove(0)
+        };
+        assert_eq!(run_on(RolloutOptions::default()), limited);
+        let off = RolloutOptions {
+            projection: false,
+            ..Default::default()
+        };
+        assert_eq!(run_on(off), plain);
+        let looser = RolloutOptions {
+            strain_limit: StrainBounds::stretch(0.2),
+            ..Default::default()
+        };
+        assert_eq!(run_on(looser), run(looser));
+        assert_ne!(run(looser), limited);
     }
 }
