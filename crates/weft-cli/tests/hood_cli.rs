@@ -141,10 +141,10 @@ fn hood_trains_resumes_and_animates() {
     // Animate an unseen garment on an unseen walk.
     let skirt = dir.join("skirt.obj");
     garment(&skirt, "skirt", 320, 7);
-    let anim = |extra: &[&str], out: &Path| {
+    let anim_run = |run: &Path, extra: &[&str], out: &Path| {
         let mut args = vec![
             "animate",
-            s(&run),
+            s(run),
             "--garment",
             s(&skirt),
             "--motion",
@@ -161,6 +161,7 @@ fn hood_trains_resumes_and_animates() {
         args.extend_from_slice(extra);
         weft(&args)
     };
+    let anim = |extra: &[&str], out: &Path| anim_run(&run, extra, out);
     let plain = dir.join("plain.pc2");
     let o = anim(&[], &plain);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -200,10 +201,11 @@ fn hood_trains_resumes_and_animates() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
 
-    // The run-time corrections: reported, and they change the frames.
+    // Run-time corrections other than the run's own projection (the cpu preset's 5 %,
+    // 5 %, 2 mm): reported, and they change the frames.
     let corrected = dir.join("corrected.pc2");
     let o = anim(
-        &["--strain-limit", "5", "--push-out", "2", "--json"],
+        &["--strain-limit", "10", "--push-out", "4", "--json"],
         &corrected,
     );
     assert!(o.status.success(), "{}", stderr(&o));
@@ -218,6 +220,40 @@ fn hood_trains_resumes_and_animates() {
         std::fs::read(&plain).unwrap(),
         std::fs::read(&corrected).unwrap()
     );
+
+    // The run's step ends in a projection (the cpu preset's `[model] project_*`): a
+    // rollout reports it by default; --no-projection gives the network's steps alone,
+    // which a copy of the run without the projection gives by default.
+    let o = anim(&["--json"], &dir.join("own.pc2"));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert!(
+        report["rollout_corrections"]["edges_limited"].is_u64(),
+        "{report}"
+    );
+    let alone = dir.join("alone.pc2");
+    let o = anim(&["--no-projection"], &alone);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_ne!(
+        std::fs::read(&plain).unwrap(),
+        std::fs::read(&alone).unwrap()
+    );
+    let unprojected = dir.join("unprojected");
+    copy_dir(&run, &unprojected);
+    let text = std::fs::read_to_string(unprojected.join("config.toml")).unwrap();
+    assert!(text.contains("project_margin = 0.002"), "{text}");
+    let text: String = text
+        .lines()
+        .filter(|l| !l.starts_with("project_"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(unprojected.join("config.toml"), text).unwrap();
+    let own = dir.join("unprojected.pc2");
+    let o = anim_run(&unprojected, &["--json"], &own);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert!(report["rollout_corrections"].is_null(), "{report}");
+    assert_eq!(std::fs::read(&alone).unwrap(), std::fs::read(&own).unwrap());
 
     // Bad input: named, non-zero, nothing written.
     let short = dir.join("short.npy");

@@ -107,7 +107,9 @@ impl HoodConfig {
     /// over the same levels: a propagation radius of 24 mesh edges instead of 48, so a
     /// usable model trains on two cores in half an hour; no settling step, velocities
     /// relative to the body and swept contacts, which the broad pool needs:
-    /// docs/hood.md item 9).
+    /// docs/hood.md item 9; a step that ends in a projection to 5 % stretch and
+    /// compression and 2 mm outside the body, which the network does not learn to do
+    /// itself: item 15).
     pub fn preset(name: &str) -> Result<Self, ModelError> {
         match name {
             "paper" => Ok(Self::new()),
@@ -117,7 +119,10 @@ impl HoodConfig {
                 .with_schedule("0,1 | 1,2 x2 | 2 | 1,2 x2 | 0,1".into())
                 .with_settle_dt(0.0)
                 .with_relative_velocity(true)
-                .with_swept_contacts(true)),
+                .with_swept_contacts(true)
+                .with_project_stretch(Some(0.05))
+                .with_project_compression(Some(0.05))
+                .with_project_margin(Some(0.002))),
             other => Err(ModelError::Config(format!(
                 "unknown preset `{other}`; expected cpu or paper"
             ))),
@@ -373,7 +378,8 @@ mod tests {
             .to_string();
         assert!(e.contains("body_radius"), "{e}");
         let cpu = HoodConfig::preset("cpu").unwrap();
-        assert!(!cpu.projects());
+        assert!(cpu.projects());
+        assert!(!HoodConfig::preset("paper").unwrap().projects());
         for bad in [-0.1, 1.0, f64::NAN] {
             let e = HoodConfig {
                 project_margin: Some(bad),
@@ -384,9 +390,16 @@ mod tests {
             .to_string();
             assert!(e.contains("project_margin"), "{e}");
         }
+        let unprojected = HoodConfig {
+            project_stretch: None,
+            project_compression: None,
+            project_margin: None,
+            ..cpu
+        };
+        assert!(!unprojected.projects());
         assert!(HoodConfig {
             project_stretch: Some(0.05),
-            ..cpu
+            ..unprojected
         }
         .projects());
     }

@@ -288,6 +288,12 @@ mod tests {
     #[test]
     fn the_name_says_which_corrections_are_on() {
         let mut p = predictor();
+        // The cpu preset's own step projection, then without it.
+        assert_eq!(
+            p.name(),
+            "HOOD (strain limit 5 %, compression limit 5 %, push-out 2 mm)"
+        );
+        p.options.projection = false;
         assert_eq!(p.name(), "HOOD");
         p.options.strain_limit.stretch = Some(7.0 / 100.0);
         p.options.contact_margin = Some(2.5 / 1000.0);

@@ -698,7 +698,8 @@ mod tests {
     /// length after five steps) and drives its back into the body. The strain limit
     /// holds every edge near it (Gauss–Seidel does not converge fully in
     /// [`STRAIN_LIMIT_SWEEPS`] sweeps on a stretch this large); the contact projection
-    /// keeps the skirt out of the body; neither is on by default.
+    /// keeps the skirt out of the body; neither is on for a model without a step
+    /// projection.
     #[test]
     fn the_run_time_corrections_hold_a_skirt_driven_into_the_body() {
         use crate::hood::{HoodStats, Materials, Scene};
@@ -707,7 +708,12 @@ mod tests {
         let (poses, trans) = crate::hood::testutil::still(6);
         let clip = crate::hood::testutil::clip(&poses, &trans);
         let device = cpu();
-        let config = HoodConfig::preset("cpu").unwrap();
+        let config = HoodConfig {
+            project_stretch: None,
+            project_compression: None,
+            project_margin: None,
+            ..HoodConfig::preset("cpu").unwrap()
+        };
         let model = InferHood::from(&config.init(&device).unwrap());
         let mut stats = HoodStats::identity(config.levels);
         stats.output.mean = vec![0.0, -0.01, 0.01];
