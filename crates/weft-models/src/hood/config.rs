@@ -81,10 +81,10 @@ pub struct HoodConfig {
     /// The step's projection, stretch bound (not in HOOD; docs/hood.md item 15): after
     /// the network's step, edges longer than `1 + project_stretch` rest lengths are
     /// shortened to it, as `weft animate --strain-limit` does. With any `project_*`
-    /// field set the projection is part of the model: training takes the potential of
-    /// the projected garment (its gradient passed straight through to the network's
-    /// step) and goes on from it, and a rollout projects every step unless told
-    /// otherwise. `None` (HOOD, runs written before it): no stretch bound.
+    /// field set the projection is part of the model: training goes on from the
+    /// projected garment (the loss stays the potential of the network's own step), and
+    /// a rollout projects every step unless told otherwise. `None` (HOOD, runs written
+    /// before it): no stretch bound.
     #[config(default = "None")]
     pub project_stretch: Option<f64>,
     /// The step's projection, compression bound: edges shorter than

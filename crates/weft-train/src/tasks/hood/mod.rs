@@ -13,7 +13,8 @@
 //!   probability a start at rest (with the settling step first, body still, when
 //!   `[model] settle_dt` > 0). The rollout of the current length runs from the skinned
 //!   garment; every step's state is the previous prediction, detached (no
-//!   backpropagation through time), and the item's loss is the mean over its steps of
+//!   backpropagation through time; projected first when the model's step ends in a
+//!   projection, `[model] project_*`, as a rollout projects it), and the item's loss is the mean over its steps of
 //!   each term of the potential, and of the distance to the implicit step when
 //!   `solver_weight` > 0. HOOD steps the optimiser after every
 //!   rollout step; here the steps of one item share one optimiser step, so an item is a
