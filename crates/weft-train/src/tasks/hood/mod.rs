@@ -14,9 +14,9 @@
 //!   `[model] settle_dt` > 0). The rollout of the current length runs from the skinned
 //!   garment; every step's state is the previous prediction, detached (no
 //!   backpropagation through time; projected first when the model's step ends in a
-//!   projection, `[model] project_*`, as a rollout projects it), and the item's loss is the mean over its steps of
-//!   each term of the potential, and of the distance to the implicit step when
-//!   `solver_weight` > 0. HOOD steps the optimiser after every
+//!   projection, `[model] project_*`, as a rollout projects it), and the item's loss
+//!   is the mean over its steps of each term of the potential, and of the distance to
+//!   the implicit step when `solver_weight` > 0. HOOD steps the optimiser after every
 //!   rollout step; here the steps of one item share one optimiser step, so an item is a
 //!   pure function of its index and the model, and a resumed run repeats it exactly.
 //! - Replay (`[train] replay`, not in HOOD): an item may instead go on with the rollout
