@@ -13,19 +13,30 @@
 //! shortens, would buckle out of its plane; the compression bound turns that into
 //! buckling as position-based cloth does, its edges held near their rest length both
 //! ways (Müller et al. 2007).
+//!
+//! Button pairs ([`StrainLimit::with_buttons`]) are held together in the same sweeps, as
+//! edges of rest length zero: the simulator's buttons are zero-length springs as stiff as
+//! the fabric (crate::buttons), so a projection that bounds the fabric's stretch closes
+//! them too, and the cloth around a button follows it within the same sweeps.
 
 use weft_mesh::vec3::{dist, sub};
 use weft_mesh::TriMesh;
 
 use crate::error::{check_len, check_nonneg, SimError};
 
-/// A garment's edges, their rest lengths and its vertices' inverse masses.
+/// A garment's edges, their rest lengths, its button pairs and its vertices' inverse
+/// masses.
 #[derive(Clone, Debug)]
 pub struct StrainLimit {
     edges: Vec<[u32; 2]>,
     rest: Vec<f64>,
+    buttons: Vec<[u32; 2]>,
     inverse_mass: Vec<f64>,
 }
+
+/// The gap (m) under which a button pair counts as closed: a pair closed in one sweep
+/// and left a rounding error apart does not keep the sweeps going.
+const BUTTON_CLOSED: f64 = 1e-6;
 
 /// How far an edge may stretch and shorten, as fractions of its rest length (`None`:
 /// unbounded that way).
@@ -98,15 +109,29 @@ impl StrainLimit {
         Ok(StrainLimit {
             edges,
             rest: rest_len,
+            buttons: Vec::new(),
             inverse_mass,
+        })
+    }
+
+    /// This limiter with `pairs` of vertices buttoned: each pair is brought together
+    /// (to the inverse-mass-weighted point between them) in every sweep, whatever the
+    /// bounds. Errors on a pair out of range or a vertex paired with itself.
+    pub fn with_buttons(&self, pairs: &[[u32; 2]]) -> Result<Self, SimError> {
+        crate::buttons::check_pairs(pairs, self.inverse_mass.len())?;
+        Ok(StrainLimit {
+            buttons: pairs.to_vec(),
+            ..self.clone()
         })
     }
 
     /// Brings every edge of `x` longer than `(1 + stretch)` or shorter than
     /// `(1 − compression)` rest lengths back to that length, in at most `sweeps`
     /// Gauss–Seidel sweeps over the edges (in a fixed order, so the result is
-    /// deterministic). An edge corrected in one sweep can be pushed out of its bounds
-    /// again by its neighbours' corrections in the same sweep; more sweeps converge.
+    /// deterministic), and closes every button pair after the edges of each sweep. An
+    /// edge corrected in one sweep can be pushed out of its bounds again by its
+    /// neighbours' corrections in the same sweep; more sweeps converge. Button pairs
+    /// count among the edges corrected.
     pub fn apply(
         &self,
         x: &mut [[f64; 3]],
@@ -151,6 +176,20 @@ impl StrainLimit {
                 }
                 over += 1;
                 let s = (l - target) / (l * (wa + wb));
+                for k in 0..3 {
+                    x[a][k] += wa * s * d[k];
+                    x[b][k] -= wb * s * d[k];
+                }
+            }
+            for &[a, b] in &self.buttons {
+                let (a, b) = (a as usize, b as usize);
+                let (wa, wb) = (self.inverse_mass[a], self.inverse_mass[b]);
+                if wa + wb == 0.0 || dist(x[a], x[b]) <= BUTTON_CLOSED {
+                    continue;
+                }
+                over += 1;
+                let d = sub(x[b], x[a]);
+                let s = 1.0 / (wa + wb);
                 for k in 0..3 {
                     x[a][k] += wa * s * d[k];
                     x[b][k] -= wb * s * d[k];
@@ -294,6 +333,57 @@ mod tests {
             let err = limiter.apply(&mut x, bounds, 3).unwrap_err();
             assert!(err.to_string().contains("compression limit"), "{err}");
         }
+    }
+
+    #[test]
+    fn button_pairs_close_where_their_masses_put_them_and_the_sheet_follows() {
+        // A strip bent into a ring with a 60° slit, its two ends buttoned together:
+        // the ends meet (each moving in inverse proportion to its mass), the edges stay
+        // within the bounds, and without buttons nothing moves.
+        let (nx, nz) = (13, 2);
+        let rest = grid(nx, nz, 0.05);
+        let n = rest.vertex_count();
+        let masses: Vec<f64> = (0..n)
+            .map(|i| if i % nx == 0 { 0.03 } else { 0.01 })
+            .collect();
+        let plain = StrainLimit::new(&rest, &masses, &vec![false; n]).unwrap();
+        let pairs: Vec<[u32; 2]> = (0..nz as u32)
+            .map(|r| [r * nx as u32, r * nx as u32 + nx as u32 - 1])
+            .collect();
+        let buttoned = plain.with_buttons(&pairs).unwrap();
+        let bounds = StrainBounds {
+            stretch: Some(0.05),
+            compression: Some(0.05),
+        };
+        let length = (nx - 1) as f64 * 0.05;
+        let radius = length / (2.0 * std::f64::consts::PI) * 6.0 / 5.0;
+        let start: Vec<[f64; 3]> = rest
+            .positions
+            .iter()
+            .map(|p| {
+                let a = p[0] / radius;
+                [radius * a.sin(), radius * (1.0 - a.cos()), p[2]]
+            })
+            .collect();
+        let mut x = start.clone();
+        let report = plain.apply(&mut x, bounds, 50).unwrap();
+        assert_eq!((report.edges_outside, x == start), (0, true));
+        let report = buttoned.apply(&mut x, bounds, 2000).unwrap();
+        assert!(report.edges_outside >= pairs.len(), "{report:?}");
+        for &[a, b] in &pairs {
+            let gap = dist(x[a as usize], x[b as usize]);
+            assert!(gap < 0.01, "pair {a}-{b} still {gap} m apart");
+        }
+        assert!(report.strain_max <= 0.06, "{report:?}");
+        // The heavier end moved a third as far as the lighter one.
+        let moved = |i: usize| dist(x[i], start[i]);
+        let (heavy, light) = (moved(0), moved(nx - 1));
+        assert!(
+            heavy < 0.6 * light,
+            "heavy end {heavy} m, light end {light} m"
+        );
+        let err = plain.with_buttons(&[[0, n as u32]]).unwrap_err();
+        assert!(err.to_string().contains("button"), "{err}");
     }
 
     #[test]

@@ -256,6 +256,8 @@ fn diverged(cur: &[[f64; 3]], next: &[[f64; 3]], dt: f64, max_speed: f64) -> Opt
 pub struct Corrector<'a> {
     scene: &'a Scene,
     limiter: Option<StrainLimit>,
+    /// The limiter with the garment's button pairs held closed, for buttoned steps.
+    buttoned: Option<StrainLimit>,
     faces: Option<FaceContact>,
     options: RolloutOptions,
 }
@@ -271,6 +273,19 @@ impl<'a> Corrector<'a> {
             ),
             false => None,
         };
+        // The strain limit holds the buttons as stiff as the fabric, as the simulator's
+        // buttons are (weft-sim's `StrainLimit::with_buttons`): a buttoned front stays
+        // closed where the network alone leaves its pairs centimetres apart.
+        // (The garment's button edges run both ways; the limiter takes each pair once.)
+        let pairs: Vec<[u32; 2]> = g.buttons.iter().filter(|p| p[0] < p[1]).copied().collect();
+        let buttoned = match (&limiter, pairs.is_empty()) {
+            (Some(limiter), false) => Some(
+                limiter
+                    .with_buttons(&pairs)
+                    .map_err(|e| ModelError::Garment(format!("the strain limit: {e}")))?,
+            ),
+            _ => None,
+        };
         let faces = match options.contact_margin {
             Some(_) => Some(
                 FaceContact::new(&g.rest, &g.pinned, &scene.omit)
@@ -281,12 +296,14 @@ impl<'a> Corrector<'a> {
         Ok(Corrector {
             scene,
             limiter,
+            buttoned,
             faces,
             options: *options,
         })
     }
 
-    /// The corrections of the step `at` from `cur` to `next`: the strain limit, then
+    /// The corrections of the step `at` from `cur` to `next`: the strain limit (holding
+    /// the button pairs closed while `at` is buttoned), then
     /// the contact projection against the planes the collision term uses (found from
     /// `cur`, on the swept body when the run uses swept contacts, so a limb that passed
     /// through the cloth in the step pushes it back to its side, and the material's
@@ -305,7 +322,11 @@ impl<'a> Corrector<'a> {
         let failed = |what: &str, e: weft_sim::SimError| {
             ModelError::Garment(format!("{what} of frame {}: {e}", at.t + 1))
         };
-        let limit = |x: &mut [[f64; 3]], sweeps: usize| match &self.limiter {
+        let limiter = match at.buttoned {
+            true => self.buttoned.as_ref().or(self.limiter.as_ref()),
+            false => self.limiter.as_ref(),
+        };
+        let limit = |x: &mut [[f64; 3]], sweeps: usize| match limiter {
             Some(limiter) => limiter
                 .apply(x, options.strain_limit, sweeps)
                 .map(|report| report.edges_outside)
@@ -834,5 +855,64 @@ mod tests {
         };
         assert_eq!(run_on(looser), run(looser));
         assert_ne!(run(looser), limited);
+    }
+
+    /// The strain limit holds a buttoned pair closed and lets it go once unbuttoned: two
+    /// free vertices of the skirt a few centimetres apart, buttoned, meet after the
+    /// first step and stay together; the step that ends at `unbutton_at` is the first
+    /// the limiter no longer joins them in.
+    #[test]
+    fn the_strain_limit_holds_buttons_until_unbuttoned() {
+        use crate::hood::{HoodStats, Materials, Scene};
+        use weft_mesh::vec3::dist;
+        use weft_sim::{Attachment, Material};
+        let (body, skirt) = crate::hood::testutil::body_and_skirt(320);
+        let (poses, trans) = crate::hood::testutil::still(8);
+        let clip = crate::hood::testutil::clip(&poses, &trans);
+        let device = cpu();
+        let config = HoodConfig {
+            project_stretch: Some(0.1),
+            ..HoodConfig::preset("cpu").unwrap()
+        };
+        let model = InferHood::from(&config.init(&device).unwrap());
+        let stats = HoodStats::identity(config.levels);
+        let hood = Materials::Uniform(Material::hood());
+        let plain =
+            Scene::new(&skirt, &body, &clip, &hood, Attachment::TopOpening, &config).unwrap();
+        // Two free vertices nearest each other that no edge joins, 1–6 cm apart.
+        let free: Vec<usize> = (0..skirt.vertex_count())
+            .filter(|&i| !plain.garment.pinned[i])
+            .collect();
+        let edges = skirt.edges();
+        let x0 = &skirt.positions;
+        let (a, b) = free
+            .iter()
+            .flat_map(|&a| free.iter().map(move |&b| (a, b)))
+            .filter(|&(a, b)| a < b && !edges.contains(&[a as u32, b as u32]))
+            .map(|(a, b)| (a, b, dist(x0[a], x0[b])))
+            .filter(|&(_, _, d)| (0.01..0.06).contains(&d))
+            .min_by(|p, q| p.2.total_cmp(&q.2))
+            .map(|(a, b, _)| (a, b))
+            .unwrap();
+        let buttoned = plain.clone().with_buttons(&[[a as u32, b as u32]]).unwrap();
+        let run = |scene: &Scene, unbutton_at: Option<usize>| {
+            let options = RolloutOptions {
+                unbutton_at,
+                ..Default::default()
+            };
+            roll_out(&model, &stats, &config, &[scene], &options, &device)
+                .unwrap()
+                .remove(0)
+        };
+        let gap = |r: &Rollout, t: usize| dist(r.frames[t][a], r.frames[t][b]);
+        let held = run(&buttoned, None);
+        let released = run(&buttoned, Some(4));
+        let never = run(&plain, None);
+        for t in 1..8 {
+            assert!(gap(&held, t) < 1e-3, "frame {t}: {} m", gap(&held, t));
+            assert!(gap(&never, t) > 0.01, "frame {t}: {} m", gap(&never, t));
+        }
+        assert_eq!(released.frames[..4], held.frames[..4]);
+        assert_ne!(released.frames[4], held.frames[4]);
     }
 }
