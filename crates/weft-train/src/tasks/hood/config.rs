@@ -57,6 +57,13 @@ pub struct HoodTraining {
     pub collision_start: f64,
     /// … to 1 between these two shares of the run.
     pub collision_ramp: [f64; 2],
+    /// The collision term's weight once ramped (HOOD: 1), a factor on the whole ramp.
+    /// 0 leaves the term out of the loss: a model whose step ends in a contact
+    /// projection (`[model] project_margin`) has its cloth kept out of the body by the
+    /// projection, as position-based cloth is, and the term's gradient, the largest of
+    /// the potential's, then only teaches the network what the projection already does
+    /// (docs/hood.md item 16). Validation keeps it at full stiffness.
+    pub collision_weight: f64,
     /// Share of samples whose garment is made of two materials, split by a random plane
     /// (HOOD's training never sees heterogeneous materials; run-time maps need it).
     pub two_materials: f64,
@@ -138,6 +145,7 @@ impl HoodTraining {
             noise: 0.003,
             collision_start: 0.01,
             collision_ramp: [0.33, 0.66],
+            collision_weight: 1.0,
             two_materials: 0.25,
             open_front: 0.0,
             random_centres: true,
@@ -193,10 +201,11 @@ impl HoodTraining {
         (f * COLLISION_LEVELS as f64).floor() as usize
     }
 
-    /// The collision weight of a level: geometric from `collision_start` to 1.
-    pub fn collision_weight(&self, level: usize) -> f64 {
+    /// The collision weight of a level: geometric from `collision_start` to 1, times
+    /// `collision_weight`.
+    pub fn collision_weight_at(&self, level: usize) -> f64 {
         let f = level.min(COLLISION_LEVELS) as f64 / COLLISION_LEVELS as f64;
-        self.collision_start.powf(1.0 - f)
+        self.collision_weight * self.collision_start.powf(1.0 - f)
     }
 
     /// Checks every range; errors name the field as in config.toml.
@@ -252,6 +261,7 @@ impl HoodTraining {
             }
         }
         for (field, v) in [
+            ("train.collision_weight", self.collision_weight),
             ("train.solver_weight", self.solver_weight),
             ("train.solver_edge_weight", self.solver_edge_weight),
         ] {
@@ -373,9 +383,14 @@ mod tests {
         assert_eq!(t.rollout_at(100_000), 5);
         assert_eq!(t.collision_level(0, 3000), 0);
         assert_eq!(t.collision_level(3000, 3000), COLLISION_LEVELS);
-        assert!((t.collision_weight(0) - 0.01).abs() < 1e-12);
-        assert!((t.collision_weight(COLLISION_LEVELS) - 1.0).abs() < 1e-12);
-        assert!(t.collision_weight(3) < t.collision_weight(4));
+        assert!((t.collision_weight_at(0) - 0.01).abs() < 1e-12);
+        assert!((t.collision_weight_at(COLLISION_LEVELS) - 1.0).abs() < 1e-12);
+        assert!(t.collision_weight_at(3) < t.collision_weight_at(4));
+        let off = HoodTraining {
+            collision_weight: 0.0,
+            ..t.clone()
+        };
+        assert!((0..=COLLISION_LEVELS).all(|l| off.collision_weight_at(l) == 0.0));
         for (bad, field) in [
             (
                 HoodTraining {
@@ -397,6 +412,13 @@ mod tests {
                     ..HoodTraining::cpu()
                 },
                 "train.collision_ramp",
+            ),
+            (
+                HoodTraining {
+                    collision_weight: -1.0,
+                    ..HoodTraining::cpu()
+                },
+                "train.collision_weight",
             ),
             (
                 HoodTraining {

@@ -895,7 +895,7 @@ impl TrainTask for HoodTask {
                 cur[i][k] += d[k];
             }
         }
-        let weight = self.training.collision_weight(self.stage.collision);
+        let weight = self.training.collision_weight_at(self.stage.collision);
         let edges = terms
             .contains(&Term::SolverEdges)
             .then(|| EdgeIndex::new(&scene.garment.levels[0], &self.device));
@@ -1115,7 +1115,7 @@ impl TrainTask for HoodTask {
         format!(
             "rollout {}, collision weight {:.3}",
             stage.rollout,
-            self.training.collision_weight(stage.collision)
+            self.training.collision_weight_at(stage.collision)
         )
     }
 
