@@ -64,6 +64,12 @@ pub struct HoodTraining {
     /// the potential's, then only teaches the network what the projection already does
     /// (docs/hood.md item 16). Validation keeps it at full stiffness.
     pub collision_weight: f64,
+    /// The stretching term's weight (HOOD: 1). 0 leaves stretching to the step
+    /// projection's strain bounds (`[model] project_stretch`, `project_compression`)
+    /// and to the implicit step's positions (`solver_weight`), which hold it too: the
+    /// term is hundreds of times stiffer than inertia, and its gradient drowns the
+    /// garment-wide motion the network is to learn (docs/hood.md items 14 and 16).
+    pub stretching_weight: f64,
     /// Share of samples whose garment is made of two materials, split by a random plane
     /// (HOOD's training never sees heterogeneous materials; run-time maps need it).
     pub two_materials: f64,
@@ -146,6 +152,7 @@ impl HoodTraining {
             collision_start: 0.01,
             collision_ramp: [0.33, 0.66],
             collision_weight: 1.0,
+            stretching_weight: 1.0,
             two_materials: 0.25,
             open_front: 0.0,
             random_centres: true,
@@ -262,6 +269,7 @@ impl HoodTraining {
         }
         for (field, v) in [
             ("train.collision_weight", self.collision_weight),
+            ("train.stretching_weight", self.stretching_weight),
             ("train.solver_weight", self.solver_weight),
             ("train.solver_edge_weight", self.solver_edge_weight),
         ] {
@@ -419,6 +427,13 @@ mod tests {
                     ..HoodTraining::cpu()
                 },
                 "train.collision_weight",
+            ),
+            (
+                HoodTraining {
+                    stretching_weight: f64::INFINITY,
+                    ..HoodTraining::cpu()
+                },
+                "train.stretching_weight",
             ),
             (
                 HoodTraining {

@@ -856,7 +856,13 @@ impl TrainTask for HoodTask {
     }
 
     fn terms(&self, _stage: &Stage) -> Vec<(Term, f64)> {
-        let mut terms: Vec<(Term, f64)> = Term::POTENTIAL.iter().map(|&t| (t, 1.0)).collect();
+        let mut terms: Vec<(Term, f64)> = Term::POTENTIAL
+            .iter()
+            .map(|&t| match t {
+                Term::Stretching => (t, self.training.stretching_weight),
+                _ => (t, 1.0),
+            })
+            .collect();
         if self.training.solver_weight > 0.0 {
             terms.push((Term::Solver, self.training.solver_weight));
         }
@@ -1361,6 +1367,40 @@ mod tests {
         let at = names.iter().position(|t| *t == Term::SolverEdges).unwrap();
         let edge = scalar(losses[at].clone());
         assert!(edge.is_finite() && edge > 0.0, "{edge}");
+    }
+
+    /// `[train] stretching_weight` weights the stretching term and `collision_weight`
+    /// the collision term's stiffness: with both 0 every item's collision loss is
+    /// exactly 0, where HOOD's weights give some a positive one, and the other terms
+    /// (each logged unweighted) are unchanged to the bit.
+    #[test]
+    fn stretching_and_collision_weights_reach_the_loss() {
+        let mut hood = task_with(small());
+        let mut off = task_with(HoodTraining {
+            stretching_weight: 0.0,
+            collision_weight: 0.0,
+            ..small()
+        });
+        let terms = off.terms(&Stage::default());
+        assert!(terms.contains(&(Term::Stretching, 0.0)), "{terms:?}");
+        assert!(hood
+            .terms(&Stage::default())
+            .contains(&(Term::Stretching, 1.0)));
+        let model = hood.config.init(&hood.device).unwrap();
+        let names: Vec<Term> = terms.iter().map(|(t, _)| *t).collect();
+        let at = |term| names.iter().position(|t| *t == term).unwrap();
+        let mut touched = 0;
+        for item in 0..8 {
+            let a = hood.losses(&model, item, &names).unwrap();
+            let b = off.losses(&model, item, &names).unwrap();
+            let value = |l: &[Tensor<1>], term| scalar(l[at(term)].clone());
+            assert_eq!(value(&b, Term::Collision), 0.0, "item {item}");
+            touched += usize::from(value(&a, Term::Collision) > 0.0);
+            for term in [Term::Stretching, Term::Inertia, Term::Solver] {
+                assert_eq!(value(&a, term), value(&b, term), "item {item}, {term:?}");
+            }
+        }
+        assert!(touched > 0, "no item touched the body");
     }
 
     /// `solver_coast` is logged with weight 0 beside the solver terms, and an untrained
