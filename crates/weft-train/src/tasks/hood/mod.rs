@@ -452,6 +452,25 @@ impl HoodTask {
         device: &Device,
     ) -> Result<Self> {
         training.validate_values()?;
+        // A term left out needs the projection that does its work at every step.
+        for (field, weight, bound, needs) in [
+            (
+                "train.collision_weight",
+                training.collision_weight,
+                config.project_margin,
+                "above 0 unless [model] project_margin is set (nothing else keeps the cloth out of the body)",
+            ),
+            (
+                "train.stretching_weight",
+                training.stretching_weight,
+                config.project_stretch,
+                "above 0 unless [model] project_stretch is set (nothing else bounds the stretch)",
+            ),
+        ] {
+            if weight == 0.0 && bound.is_none() {
+                return Err(TrainError::config(field, weight, needs));
+            }
+        }
         let mut rng = SplitMix64::new(seed ^ 0x4F0D_5EED);
         let train_shapes = shapes(training, training.shapes.max(1), &mut rng);
         let garments = garment_pool(training, &body, &train_shapes, seed)?;
@@ -1214,7 +1233,49 @@ mod tests {
             validation_scenes: 1,
             validation_frames: 5,
             replay: 0.0,
+            // HOOD's terms, so that a test may take the projection away.
+            collision_weight: 1.0,
+            stretching_weight: 1.0,
             ..HoodTraining::cpu()
+        }
+    }
+
+    /// A term left out of the loss needs the projection that does its work: the
+    /// `cpu` preset trains, and without `[model] project_margin` / `project_stretch`
+    /// its training settings are refused by name.
+    #[test]
+    fn terms_left_out_need_the_projection() {
+        let device = weft_nn::backend::cpu();
+        let body = || weft_body::default_body().unwrap();
+        let stats = || Some(HoodStats::identity(3));
+        let cpu = HoodConfig::preset("cpu").unwrap();
+        let training = HoodTraining {
+            collision_weight: 0.0,
+            stretching_weight: 0.0,
+            ..small()
+        };
+        assert!(HoodTask::new(&cpu, &training, body(), stats(), 7, &device).is_ok());
+        for (config, field) in [
+            (
+                HoodConfig {
+                    project_margin: None,
+                    ..cpu.clone()
+                },
+                "train.collision_weight",
+            ),
+            (
+                HoodConfig {
+                    project_stretch: None,
+                    ..cpu.clone()
+                },
+                "train.stretching_weight",
+            ),
+        ] {
+            let e = HoodTask::new(&config, &training, body(), stats(), 7, &device)
+                .err()
+                .unwrap()
+                .to_string();
+            assert!(e.contains(field), "{e}");
         }
     }
 
