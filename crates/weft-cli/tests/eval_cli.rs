@@ -173,11 +173,15 @@ fn bad_input_is_one_line_and_writes_nothing() {
     let run = d.join("run");
     let (data, garment) = (d.join("data"), d.join("animation/garment.obj"));
     let (never_png, never_pc2) = (d.join("never.png"), d.join("never.pc2"));
-    let cases: [(Vec<&str>, &str); 6] = [
+    let cases: [(Vec<&str>, &str); 7] = [
         (vec!["eval", s(&run)], "--data DIR is required"),
         (
             vec!["eval", s(&run), "--data", s(&data), "--strain-limit", "5"],
             "--strain-limit applies to hood runs",
+        ),
+        (
+            vec!["eval", s(&run), "--data", s(&data), "--refine", "2"],
+            "--refine applies to hood runs",
         ),
         (vec!["eval", "no/such/run", "--data", "x"], "config.toml"),
         (

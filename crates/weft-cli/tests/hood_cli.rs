@@ -221,6 +221,15 @@ fn hood_trains_resumes_and_animates() {
         std::fs::read(&corrected).unwrap()
     );
 
+    // Newton iterations of the step's potential after each network step: other frames.
+    let refined = dir.join("refined.pc2");
+    let o = anim(&["--refine", "2"], &refined);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_ne!(
+        std::fs::read(&plain).unwrap(),
+        std::fs::read(&refined).unwrap()
+    );
+
     // The run's step ends in a projection (the cpu preset's `[model] project_*`): a
     // rollout reports it by default; --no-projection gives the network's steps alone,
     // which a copy of the run without the projection gives by default.

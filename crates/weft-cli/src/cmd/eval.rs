@@ -67,6 +67,10 @@ pub struct EvalArgs {
     /// --no-projection`).
     #[arg(long)]
     no_projection: bool,
+    /// HOOD runs: this many Newton iterations of each step's incremental potential after
+    /// the network's step (`weft animate --refine`).
+    #[arg(long, value_name = "ITERATIONS", default_value_t = 0)]
+    refine: usize,
     /// Character datasets only: move the root of every pose by this (x,y,z, metres), the
     /// translation test of seed 001 Fig. 3.23.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
@@ -101,7 +105,8 @@ fn hood_options(args: &EvalArgs) -> Result<RolloutOptions> {
         .iter()
         .find(|(_, v)| v.is_some())
         .map(|(flag, _)| *flag)
-        .or(args.no_projection.then_some("--no-projection"));
+        .or(args.no_projection.then_some("--no-projection"))
+        .or((args.refine > 0).then_some("--refine"));
     if let Some(flag) = given {
         let hood = args.runs.iter().any(|r| {
             read_run_config(r).is_ok_and(|(h, _)| h.model == weft_models::ModelKind::Hood)
@@ -114,6 +119,7 @@ fn hood_options(args: &EvalArgs) -> Result<RolloutOptions> {
         strain_limit: strain_bounds(args.strain_limit, args.compression_limit)?,
         contact_margin: args.push_out.map(push_out).transpose()?,
         projection: !args.no_projection,
+        refine: args.refine,
         ..RolloutOptions::default()
     })
 }

@@ -43,6 +43,11 @@ pub struct HoodArgs {
     /// only the corrections these flags ask for.
     #[arg(long)]
     no_projection: bool,
+    /// HOOD: after every network step, this many Newton iterations of the step's
+    /// incremental potential (the physics the network was trained to minimise),
+    /// started from the network's prediction. 0 (the default): the network's steps.
+    #[arg(long, value_name = "ITERATIONS", default_value_t = 0)]
+    refine: usize,
 }
 
 impl HoodArgs {
@@ -58,6 +63,8 @@ impl HoodArgs {
             Some("--compression-limit")
         } else if self.no_projection {
             Some("--no-projection")
+        } else if self.refine > 0 {
+            Some("--refine")
         } else {
             None
         }
@@ -94,6 +101,7 @@ impl HoodArgs {
         hood.options.unbutton_at = self.unbutton_at;
         hood.options.strain_limit = strain_bounds(self.strain_limit, self.compression_limit)?;
         hood.options.projection = !self.no_projection;
+        hood.options.refine = self.refine;
         Ok(())
     }
 }

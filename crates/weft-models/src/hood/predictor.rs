@@ -139,6 +139,9 @@ impl Deformer for HoodPredictor {
         // The flags' own units, rounded so that 0.07 reads 7, not 7.000000000000001.
         let shown = |x: f64| (x * 1e6).round() / 1e6;
         let mut on = Vec::new();
+        if o.refine > 0 {
+            on.push(format!("{} Newton iterations", o.refine));
+        }
         if let Some(limit) = o.strain_limit.stretch {
             on.push(format!("strain limit {} %", shown(100.0 * limit)));
         }
@@ -302,6 +305,11 @@ mod tests {
         assert_eq!(
             p.name(),
             "HOOD (strain limit 7 %, compression limit 3 %, push-out 2.5 mm)"
+        );
+        p.options.refine = 2;
+        assert_eq!(
+            p.name(),
+            "HOOD (2 Newton iterations, strain limit 7 %, compression limit 3 %, push-out 2.5 mm)"
         );
     }
 }

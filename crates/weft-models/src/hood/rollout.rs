@@ -114,6 +114,11 @@ pub struct RolloutOptions {
     /// trained with a projection rolls out with it). Off (`--no-projection`): only the
     /// bounds set here.
     pub projection: bool,
+    /// Newton iterations of the step's incremental potential (the objective the
+    /// network is trained to minimise) after every network step, started from the
+    /// network's prediction, before the corrections ([`Scene::refine_step`]). 0 (the
+    /// default): the network's step as it is (HOOD).
+    pub refine: usize,
 }
 
 impl Default for RolloutOptions {
@@ -124,6 +129,7 @@ impl Default for RolloutOptions {
             strain_limit: StrainBounds::default(),
             contact_margin: None,
             projection: true,
+            refine: 0,
         }
     }
 }
@@ -498,7 +504,27 @@ pub fn roll_out(
         }
         let pairs: Vec<_> = steps.iter().map(|(g, a)| (g, a)).collect();
         let next = step_batch(model, stats, &pairs, device)?;
-        for (&k, mut x) in active.iter().zip(next) {
+        for (&k, x) in active.iter().zip(next) {
+            let mut x = match options.refine {
+                0 => x,
+                iterations => {
+                    let frames = &out[k].frames;
+                    let prev = if t == 0 { &before[k] } else { &frames[t - 1] };
+                    let state = StateRef {
+                        prev,
+                        cur: &frames[t],
+                    };
+                    let at = step_at(k, t);
+                    let body = scenes[k].contact_body(at)?;
+                    match scenes[k].refine_step(state, at, body.as_ref(), &x, iterations) {
+                        Ok(x) => x,
+                        Err(e) => {
+                            out[k].stopped = Some((t + 1, e.to_string()));
+                            continue;
+                        }
+                    }
+                }
+            };
             match diverged(&out[k].frames[t], &x, scenes[k].dt, options.max_speed) {
                 Some(why) => out[k].stopped = Some((t + 1, why)),
                 None => {
@@ -648,6 +674,75 @@ mod tests {
         }
     }
 
+    /// The `cpu` preset without its step projection: the network's steps as they are.
+    fn unprojected_cpu() -> HoodConfig {
+        HoodConfig {
+            project_stretch: None,
+            project_compression: None,
+            project_margin: None,
+            ..HoodConfig::preset("cpu").unwrap()
+        }
+    }
+
+    /// `refine` Newton iterations after each network step: the untrained network
+    /// coasts (the skirt hangs where it was skinned, gravity or not), one iteration
+    /// lowers it under gravity, and enough of them give weft-sim's implicit step.
+    #[test]
+    fn refined_steps_go_to_the_implicit_step() {
+        use crate::hood::{HoodStats, Materials, Scene};
+        use weft_sim::{Attachment, Material};
+        let (body, skirt) = crate::hood::testutil::body_and_skirt(320);
+        let (poses, trans) = crate::hood::testutil::still(2);
+        let clip = crate::hood::testutil::clip(&poses, &trans);
+        let device = cpu();
+        let config = unprojected_cpu().with_settle_dt(0.0);
+        let model = InferHood::from(&config.init(&device).unwrap());
+        let stats = HoodStats::identity(config.levels);
+        let hood = Materials::Uniform(Material::hood());
+        let scene =
+            Scene::new(&skirt, &body, &clip, &hood, Attachment::TopOpening, &config).unwrap();
+        let frame_1 = |refine: usize| {
+            let options = RolloutOptions {
+                refine,
+                ..RolloutOptions::default()
+            };
+            let r = roll_out(&model, &stats, &config, &[&scene], &options, &device).unwrap();
+            r[0].frames[1].clone()
+        };
+        let start = scene.start(0, true).unwrap().cur;
+        let at = StepAt {
+            t: 0,
+            settle: false,
+            dt: scene.dt,
+            buttoned: true,
+        };
+        let state = StateRef {
+            prev: &start,
+            cur: &start,
+        };
+        let body = scene.contact_body(at).unwrap();
+        let implicit = scene.implicit_step(state, at, body.as_ref()).unwrap();
+        // The free vertices' mean drop from the start, and the largest distance from
+        // the implicit step.
+        let free: Vec<usize> = (0..start.len())
+            .filter(|&i| !scene.garment.pinned[i])
+            .collect();
+        let drop = |x: &[[f64; 3]]| {
+            free.iter().map(|&i| start[i][1] - x[i][1]).sum::<f64>() / free.len() as f64
+        };
+        let off = |x: &[[f64; 3]]| {
+            free.iter()
+                .map(|&i| weft_mesh::vec3::dist(x[i], implicit[i]))
+                .fold(0.0, f64::max)
+        };
+        let (coast, once, solved) = (frame_1(0), frame_1(1), frame_1(50));
+        let sag = drop(&implicit);
+        assert!(sag > 1e-4, "the implicit step lowers the skirt: {sag}");
+        assert!(drop(&coast).abs() < 1e-9, "{}", drop(&coast));
+        assert!(drop(&once) > 0.5 * sag, "{} of {sag}", drop(&once));
+        assert!(off(&solved) < 1e-5, "{}", off(&solved));
+    }
+
     #[test]
     fn a_divergence_is_named_at_the_motion_frame_it_kept_from_being_reached() {
         let at = |t: f64| vec![[t; 3]];
@@ -729,12 +824,7 @@ mod tests {
         let (poses, trans) = crate::hood::testutil::still(6);
         let clip = crate::hood::testutil::clip(&poses, &trans);
         let device = cpu();
-        let config = HoodConfig {
-            project_stretch: None,
-            project_compression: None,
-            project_margin: None,
-            ..HoodConfig::preset("cpu").unwrap()
-        };
+        let config = unprojected_cpu();
         let model = InferHood::from(&config.init(&device).unwrap());
         let mut stats = HoodStats::identity(config.levels);
         stats.output.mean = vec![0.0, -0.01, 0.01];

@@ -419,6 +419,31 @@ impl Scene {
         at: StepAt,
         body: &(dyn BodyProximity + Sync),
     ) -> Result<Vec<[f64; 3]>, ModelError> {
+        self.solve_step(state, at, body, None)
+    }
+
+    /// The step `at` from `state` refined from `predicted` (a network's step) by at most
+    /// `iterations` Newton iterations on the same incremental potential: the
+    /// [`Scene::implicit_step`] started from the prediction instead of inertia and cut
+    /// short ([`RolloutOptions::refine`](super::RolloutOptions::refine)).
+    pub fn refine_step(
+        &self,
+        state: StateRef,
+        at: StepAt,
+        body: &(dyn BodyProximity + Sync),
+        predicted: &[[f64; 3]],
+        iterations: usize,
+    ) -> Result<Vec<[f64; 3]>, ModelError> {
+        self.solve_step(state, at, body, Some((predicted, iterations)))
+    }
+
+    fn solve_step(
+        &self,
+        state: StateRef,
+        at: StepAt,
+        body: &(dyn BodyProximity + Sync),
+        from: Option<(&[[f64; 3]], usize)>,
+    ) -> Result<Vec<[f64; 3]>, ModelError> {
         let sim = |e: weft_sim::SimError| ModelError::Garment(format!("the implicit step: {e}"));
         let mut solver = ClothSimulator::from_model(self.cloth_at(at).into_owned()).map_err(sim)?;
         let v = state
@@ -433,7 +458,11 @@ impl Scene {
         for (i, _) in self.garment.pinned.iter().enumerate().filter(|(_, &p)| p) {
             solver.move_pin(i as u32, targets[i]).map_err(sim)?;
         }
-        solver.step(at.dt, Some(body)).map_err(sim)?;
+        match from {
+            Some((start, iterations)) => solver.step_from(at.dt, Some(body), start, iterations),
+            None => solver.step(at.dt, Some(body)),
+        }
+        .map_err(sim)?;
         Ok(solver.positions().to_vec())
     }
 }
