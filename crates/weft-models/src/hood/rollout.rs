@@ -741,6 +741,19 @@ mod tests {
         assert!(drop(&coast).abs() < 1e-9, "{}", drop(&coast));
         assert!(drop(&once) > 0.5 * sag, "{} of {sag}", drop(&once));
         assert!(off(&solved) < 1e-5, "{}", off(&solved));
+        // A prediction the solver cannot start from stops the rollout at that frame,
+        // keeping the frames before it.
+        let mut broken = stats.clone();
+        broken.output.mean = vec![f32::NAN, 0.0, 0.0];
+        let options = RolloutOptions {
+            refine: 2,
+            ..RolloutOptions::default()
+        };
+        let r = roll_out(&model, &broken, &config, &[&scene], &options, &device).unwrap();
+        assert_eq!(r[0].frames.len(), 1);
+        let (frame, why) = r[0].stopped.clone().unwrap();
+        assert_eq!(frame, 1);
+        assert!(why.contains("the Newton refinement"), "{why}");
     }
 
     #[test]

@@ -444,7 +444,11 @@ impl Scene {
         body: &(dyn BodyProximity + Sync),
         from: Option<(&[[f64; 3]], usize)>,
     ) -> Result<Vec<[f64; 3]>, ModelError> {
-        let sim = |e: weft_sim::SimError| ModelError::Garment(format!("the implicit step: {e}"));
+        let what = match from {
+            Some(_) => "the Newton refinement",
+            None => "the implicit step",
+        };
+        let sim = |e: weft_sim::SimError| ModelError::Garment(format!("{what}: {e}"));
         let mut solver = ClothSimulator::from_model(self.cloth_at(at).into_owned()).map_err(sim)?;
         let v = state
             .cur
