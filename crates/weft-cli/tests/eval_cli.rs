@@ -173,7 +173,7 @@ fn bad_input_is_one_line_and_writes_nothing() {
     let run = d.join("run");
     let (data, garment) = (d.join("data"), d.join("animation/garment.obj"));
     let (never_png, never_pc2) = (d.join("never.png"), d.join("never.pc2"));
-    let cases: [(Vec<&str>, &str); 7] = [
+    let cases: [(Vec<&str>, &str); 8] = [
         (vec!["eval", s(&run)], "--data DIR is required"),
         (
             vec!["eval", s(&run), "--data", s(&data), "--strain-limit", "5"],
@@ -182,6 +182,10 @@ fn bad_input_is_one_line_and_writes_nothing() {
         (
             vec!["eval", s(&run), "--data", s(&data), "--refine", "2"],
             "--refine applies to hood runs",
+        ),
+        (
+            vec!["eval", s(&run), "--data", s(&data), "--objective"],
+            "--objective applies to hood runs",
         ),
         (vec!["eval", "no/such/run", "--data", "x"], "config.toml"),
         (

@@ -229,6 +229,16 @@ fn hood_trains_resumes_and_animates() {
         std::fs::read(&plain).unwrap(),
         std::fs::read(&refined).unwrap()
     );
+    // The run's objective in place of its network: other frames again.
+    let objective = dir.join("objective.pc2");
+    let o = anim(&["--objective"], &objective);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for other in [&plain, &refined] {
+        assert_ne!(
+            std::fs::read(other).unwrap(),
+            std::fs::read(&objective).unwrap()
+        );
+    }
 
     // The run's step ends in a projection (the cpu preset's `[model] project_*`): a
     // rollout reports it by default; --no-projection gives the network's steps alone,

@@ -242,6 +242,7 @@ pub fn run_demo(
         &data_dir,
         &eval_opts,
         &weft_models::hood::RolloutOptions::default(),
+        false,
         &mut line,
     )?;
     let r = &evaluation.report;

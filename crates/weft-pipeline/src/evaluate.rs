@@ -16,12 +16,15 @@ use crate::error::{stage, PipelineError};
 /// Evaluates the run in `run` and the baselines on `data`, writes `RUN/report/`
 /// (eval.json, eval.md, eval.html and pictures) and returns the evaluation and the
 /// report's HTML path. `progress` gets one line per sequence. A HOOD run rolls out with
-/// `hood` (its run-time corrections); other kinds ignore it.
+/// `hood` (its run-time corrections), and with `objective` its objective is scored
+/// beside it (the same rollout by implicit Euler steps, [`RolloutOptions::objective`]);
+/// other kinds ignore both.
 pub fn evaluate_run(
     run: &Path,
     data: &Path,
     opts: &EvalOptions,
     hood: &RolloutOptions,
+    objective: bool,
     progress: &mut dyn FnMut(&str),
 ) -> Result<(Evaluation, std::path::PathBuf), PipelineError> {
     let loading = || format!("loading run {}", run.display());
@@ -41,6 +44,17 @@ pub fn evaluate_run(
         }
         _ => Some(load_deformer(run).map_err(stage(&loading()))?),
     };
+    let objective = match (kind, objective) {
+        (ModelKind::Hood, true) => {
+            let mut h = HoodPredictor::load(run).map_err(stage(&loading()))?;
+            h.options = RolloutOptions {
+                objective: true,
+                ..*hood
+            };
+            Some(h)
+        }
+        _ => None,
+    };
     let dataset =
         Dataset::open(data).map_err(stage(&format!("opening dataset {}", data.display())))?;
     let coarse = garfit.as_ref().map(GarFitPredictor::coarse_stage);
@@ -53,6 +67,9 @@ pub fn evaluate_run(
     }
     if let Some(m) = &model {
         methods.push(m.as_ref());
+    }
+    if let Some(o) = &objective {
+        methods.push(o);
     }
     methods.extend([
         &SkinningBaseline::LBS as &dyn Deformer,

@@ -71,6 +71,11 @@ pub struct EvalArgs {
     /// the network's step (`weft animate --refine`).
     #[arg(long, value_name = "ITERATIONS", default_value_t = 0)]
     refine: usize,
+    /// HOOD runs: also score the run's objective, a row of its own: the same rollout
+    /// with every step weft-sim's implicit Euler step of the potential the network is
+    /// trained on (`weft animate --objective`).
+    #[arg(long)]
+    objective: bool,
     /// Character datasets only: move the root of every pose by this (x,y,z, metres), the
     /// translation test of seed 001 Fig. 3.23.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3)]
@@ -106,7 +111,8 @@ fn hood_options(args: &EvalArgs) -> Result<RolloutOptions> {
         .find(|(_, v)| v.is_some())
         .map(|(flag, _)| *flag)
         .or(args.no_projection.then_some("--no-projection"))
-        .or((args.refine > 0).then_some("--refine"));
+        .or((args.refine > 0).then_some("--refine"))
+        .or(args.objective.then_some("--objective"));
     if let Some(flag) = given {
         let hood = args.runs.iter().any(|r| {
             read_run_config(r).is_ok_and(|(h, _)| h.model == weft_models::ModelKind::Hood)
@@ -153,6 +159,7 @@ pub fn evaluate_run(
     data: &Path,
     opts: &EvalOptions,
     hood: &RolloutOptions,
+    objective: bool,
     quiet: bool,
 ) -> Result<EvalReport> {
     // The heading is printed with the first progress line, so input that fails while
@@ -171,7 +178,8 @@ pub fn evaluate_run(
             eprintln!("  {line}");
         }
     };
-    let (eval, html) = weft_pipeline::evaluate::evaluate_run(run, data, opts, hood, &mut progress)?;
+    let (eval, html) =
+        weft_pipeline::evaluate::evaluate_run(run, data, opts, hood, objective, &mut progress)?;
     if let Some(h) = heading {
         eprintln!("{h}");
     }
@@ -215,7 +223,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         ..EvalOptions::default()
     };
     if !args.compare {
-        let report = evaluate_run(&args.runs[0], data, &opts, &hood, args.json)?;
+        let report = evaluate_run(&args.runs[0], data, &opts, &hood, args.objective, args.json)?;
         if args.json {
             emit(&serde_json::to_string_pretty(&report)?)?;
         } else {
@@ -227,7 +235,11 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     for run in &args.runs {
         let cached = run.join("report").join("eval.json");
         // A cached report does not say which corrections it was made with.
-        let reused = if args.reuse && hood == RolloutOptions::default() && cached.is_file() {
+        let reused = if args.reuse
+            && hood == RolloutOptions::default()
+            && !args.objective
+            && cached.is_file()
+        {
             let r = EvalReport::read(&cached)?;
             (r.data == data.display().to_string() && r.split == args.split.name()).then_some(r)
         } else {
@@ -255,7 +267,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                 if args.no_projection {
                     o.command += " --no-projection";
                 }
-                evaluate_run(run, data, &o, &hood, args.json)?
+                evaluate_run(run, data, &o, &hood, args.objective, args.json)?
             }
         };
         reports.push(report);

@@ -48,6 +48,12 @@ pub struct HoodArgs {
     /// started from the network's prediction. 0 (the default): the network's steps.
     #[arg(long, value_name = "ITERATIONS", default_value_t = 0)]
     refine: usize,
+    /// HOOD: roll out the run's objective instead of its network: every step the
+    /// implicit Euler step of the incremental potential the network is trained on, from
+    /// the same start and with the same corrections (what the network would give were it
+    /// exact).
+    #[arg(long)]
+    objective: bool,
 }
 
 impl HoodArgs {
@@ -65,6 +71,8 @@ impl HoodArgs {
             Some("--no-projection")
         } else if self.refine > 0 {
             Some("--refine")
+        } else if self.objective {
+            Some("--objective")
         } else {
             None
         }
@@ -102,6 +110,7 @@ impl HoodArgs {
         hood.options.strain_limit = strain_bounds(self.strain_limit, self.compression_limit)?;
         hood.options.projection = !self.no_projection;
         hood.options.refine = self.refine;
+        hood.options.objective = self.objective;
         Ok(())
     }
 }

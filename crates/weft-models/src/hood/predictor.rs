@@ -139,7 +139,7 @@ impl Deformer for HoodPredictor {
         // The flags' own units, rounded so that 0.07 reads 7, not 7.000000000000001.
         let shown = |x: f64| (x * 1e6).round() / 1e6;
         let mut on = Vec::new();
-        if o.refine > 0 {
+        if o.refine > 0 && !o.objective {
             on.push(format!("{} Newton iterations", o.refine));
         }
         if let Some(limit) = o.strain_limit.stretch {
@@ -151,9 +151,14 @@ impl Deformer for HoodPredictor {
         if let Some(margin) = o.contact_margin {
             on.push(format!("push-out {} mm", shown(1000.0 * margin)));
         }
+        // The objective is the solver's rollout, not the network's: named apart.
+        let method = match o.objective {
+            true => "HOOD's objective, implicit Euler",
+            false => "HOOD",
+        };
         match on.is_empty() {
-            true => "HOOD".into(),
-            false => format!("HOOD ({})", on.join(", ")),
+            true => method.into(),
+            false => format!("{method} ({})", on.join(", ")),
         }
     }
 
@@ -162,12 +167,20 @@ impl Deformer for HoodPredictor {
     }
 
     fn variant(&self) -> BTreeMap<String, String> {
-        BTreeMap::from([
+        let mut v = BTreeMap::from([
             ("checkpoint".into(), self.checkpoint.display().to_string()),
             ("schedule".into(), self.config.schedule.clone()),
             ("latent".into(), self.config.latent.to_string()),
             ("step_fps".into(), self.config.step_fps.to_string()),
-        ])
+        ]);
+        if self.options.objective {
+            let newton = super::rollout::OBJECTIVE_ITERATIONS.max(self.options.refine);
+            v.insert(
+                "objective".into(),
+                format!("{newton} Newton iterations a step"),
+            );
+        }
+        v
     }
 
     /// The rollout's frames; a rollout that diverges is an error naming the frame (the
@@ -310,6 +323,11 @@ mod tests {
         assert_eq!(
             p.name(),
             "HOOD (2 Newton iterations, strain limit 7 %, compression limit 3 %, push-out 2.5 mm)"
+        );
+        p.options.objective = true;
+        assert_eq!(
+            p.name(),
+            "HOOD's objective, implicit Euler (strain limit 7 %, compression limit 3 %, push-out 2.5 mm)"
         );
     }
 }

@@ -119,7 +119,16 @@ pub struct RolloutOptions {
     /// network's prediction, before the corrections ([`Scene::refine_step`]). 0 (the
     /// default): the network's step as it is (HOOD).
     pub refine: usize,
+    /// Roll out the run's objective instead of its network: every step is weft-sim's
+    /// implicit Euler step of the incremental potential the network is trained on (up
+    /// to [`OBJECTIVE_ITERATIONS`] Newton iterations from inertia), then the same
+    /// corrections. What the network would give were it exact, from the same start.
+    pub objective: bool,
 }
+
+/// Newton iterations of a step of [`RolloutOptions::objective`]: weft-sim's own budget
+/// for one implicit step ([`weft_sim::NewtonOptions`]' default).
+pub const OBJECTIVE_ITERATIONS: usize = 50;
 
 impl Default for RolloutOptions {
     fn default() -> Self {
@@ -130,6 +139,7 @@ impl Default for RolloutOptions {
             contact_margin: None,
             projection: true,
             refine: 0,
+            objective: false,
         }
     }
 }
@@ -428,6 +438,19 @@ pub fn roll_out(
             .unbutton_at
             .is_none_or(|f| (t as f64) < f as f64 * scenes[k].steps_per_frame() - 1e-9)
     };
+    // The step's prediction: the network's, or inertia's for the objective (whose
+    // Newton iterations then take the whole step).
+    let predict = |steps: &[(super::features::StepGraph, Advance)]| match options.objective {
+        true => Ok(steps.iter().map(|(_, a)| a.inertial_target()).collect()),
+        false => {
+            let pairs: Vec<_> = steps.iter().map(|(g, a)| (g, a)).collect();
+            step_batch(model, stats, &pairs, device)
+        }
+    };
+    let iterations = match options.objective {
+        true => OBJECTIVE_ITERATIONS.max(options.refine),
+        false => options.refine,
+    };
     let mut starts = Vec::with_capacity(scenes.len());
     for s in scenes {
         starts.push(s.start(0, true)?);
@@ -448,8 +471,22 @@ pub fn roll_out(
                 s.step(start.as_ref(), StepAt { buttoned, ..at }, config)
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let pairs: Vec<_> = states.iter().map(|(g, a)| (g, a)).collect();
-        step_batch(model, stats, &pairs, device)?
+        let predicted = predict(&states)?;
+        let mut settled = Vec::with_capacity(scenes.len());
+        for (k, ((s, start), x)) in scenes.iter().zip(&starts).zip(predicted).enumerate() {
+            settled.push(match iterations {
+                0 => x,
+                n => {
+                    let at = StepAt {
+                        buttoned: buttoned(k, 0),
+                        ..at
+                    };
+                    let body = s.contact_body(at)?;
+                    s.refine_step(start.as_ref(), at, body.as_ref(), &x, n)?
+                }
+            });
+        }
+        settled
     } else {
         starts.into_iter().map(|s| s.cur).collect()
     };
@@ -502,10 +539,9 @@ pub fn roll_out(
             let prev = if t == 0 { &before[k] } else { &frames[t - 1] };
             steps.push(scenes[k].step(StateRef { prev, cur }, step_at(k, t), config)?);
         }
-        let pairs: Vec<_> = steps.iter().map(|(g, a)| (g, a)).collect();
-        let next = step_batch(model, stats, &pairs, device)?;
+        let next = predict(&steps)?;
         for (&k, x) in active.iter().zip(next) {
-            let mut x = match options.refine {
+            let mut x = match iterations {
                 0 => x,
                 iterations => {
                     let frames = &out[k].frames;
@@ -686,7 +722,8 @@ mod tests {
 
     /// `refine` Newton iterations after each network step: the untrained network
     /// coasts (the skirt hangs where it was skinned, gravity or not), one iteration
-    /// lowers it under gravity, and enough of them give weft-sim's implicit step.
+    /// lowers it under gravity, and enough of them give weft-sim's implicit step, which
+    /// the objective's rollout gives whatever the network.
     #[test]
     fn refined_steps_go_to_the_implicit_step() {
         use crate::hood::{HoodStats, Materials, Scene};
@@ -741,6 +778,16 @@ mod tests {
         assert!(drop(&coast).abs() < 1e-9, "{}", drop(&coast));
         assert!(drop(&once) > 0.5 * sag, "{} of {sag}", drop(&once));
         assert!(off(&solved) < 1e-5, "{}", off(&solved));
+        // The objective: the implicit step whatever the network (here one that would
+        // push every vertex a centimetre sideways).
+        let mut pushing = stats.clone();
+        pushing.output.mean = vec![0.01, 0.0, 0.0];
+        let options = RolloutOptions {
+            objective: true,
+            ..RolloutOptions::default()
+        };
+        let r = roll_out(&model, &pushing, &config, &[&scene], &options, &device).unwrap();
+        assert!(off(&r[0].frames[1]) < 1e-5, "{}", off(&r[0].frames[1]));
         // A prediction the solver cannot start from stops the rollout at that frame,
         // keeping the frames before it.
         let mut broken = stats.clone();
