@@ -214,7 +214,9 @@ impl<'a> Evaluator<'a> {
         })
     }
 
-    /// Animates `seq` with every method and scores each against its simulated frames;
+    /// Animates `seq` with every method (in the material it was simulated in, for a
+    /// method that takes one: [`Deformer::animate_in`]) and scores each against its
+    /// simulated frames;
     /// times inference on the first sequence. Returns each method's mean vertex error
     /// (mm) on this sequence.
     pub fn add(&mut self, mut seq: Sequence) -> Result<Vec<f64>, EvalError> {
@@ -239,7 +241,7 @@ impl<'a> Evaluator<'a> {
         let predicted: Vec<Frames> = self
             .methods
             .iter()
-            .map(|m| m.animate(&seq.garment, body, &clip))
+            .map(|m| m.animate_in(&seq.garment, body, &clip, &seq.record.material))
             .collect::<Result<_, _>>()?;
         let bodies = if self.opts.collisions || self.example.is_none() {
             Some(PosedSequence::new(

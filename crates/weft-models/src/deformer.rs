@@ -123,6 +123,19 @@ pub trait Deformer: Sync {
         clip: &Clip,
     ) -> Result<Frames, ModelError>;
 
+    /// [`Deformer::animate`] for a garment made of `material` (a weft-sim preset name, as
+    /// a dataset records what it simulated): a system that takes its material at run
+    /// time (HOOD) rolls out in it; the others learnt their data's and ignore it.
+    fn animate_in(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+        _material: &str,
+    ) -> Result<Frames, ModelError> {
+        self.animate(garment, body, clip)
+    }
+
     /// Frames per second at each of `batches` frames per pass over `frames` frames of
     /// `clip`, timed the way the system is meant to run; `None` when there is nothing
     /// worth timing apart from [`Deformer::animate`] (the baselines).

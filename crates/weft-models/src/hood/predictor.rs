@@ -89,11 +89,22 @@ impl HoodPredictor {
         body: &BodyModel,
         clip: &Clip,
     ) -> Result<Scene, ModelError> {
+        self.scene_in(garment, body, clip, &self.materials)
+    }
+
+    /// The [`HoodPredictor::scene`] with `materials` in place of the predictor's.
+    fn scene_in(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+        materials: &Materials,
+    ) -> Result<Scene, ModelError> {
         let mut scene = Scene::new(
             garment,
             body,
             clip,
-            &self.materials,
+            materials,
             self.attachment,
             &self.config,
         )?;
@@ -111,10 +122,29 @@ impl HoodPredictor {
         body: &BodyModel,
         clip: &Clip,
     ) -> Result<Rollout, ModelError> {
-        let scene = self.scene(garment, body, clip)?;
-        self.roll_out(&[&scene])?
+        self.roll_out_scene(&self.scene(garment, body, clip)?)
+    }
+
+    fn roll_out_scene(&self, scene: &Scene) -> Result<Rollout, ModelError> {
+        self.roll_out(&[scene])?
             .pop()
             .ok_or_else(|| ModelError::Config("HOOD returned no rollout".into()))
+    }
+
+    /// A rollout's frames as [`Deformer::animate`] returns them: a divergence is an error
+    /// naming the frame.
+    fn frames(rollout: Rollout) -> Result<Frames, ModelError> {
+        if let Some((frame, why)) = rollout.stopped {
+            return Err(ModelError::Diverged {
+                frame,
+                message: why,
+            });
+        }
+        Ok(rollout
+            .frames
+            .into_iter()
+            .map(|f| f.into_iter().map(|p| p.map(|x| x as f32)).collect())
+            .collect())
     }
 
     /// Rolls out several scenes together (one forward pass per frame for all of them).
@@ -191,18 +221,22 @@ impl Deformer for HoodPredictor {
         body: &BodyModel,
         clip: &Clip,
     ) -> Result<Frames, ModelError> {
-        let rollout = self.roll_out_clip(garment, body, clip)?;
-        if let Some((frame, why)) = rollout.stopped {
-            return Err(ModelError::Diverged {
-                frame,
-                message: why,
-            });
-        }
-        Ok(rollout
-            .frames
-            .into_iter()
-            .map(|f| f.into_iter().map(|p| p.map(|x| x as f32)).collect())
-            .collect())
+        Self::frames(self.roll_out_clip(garment, body, clip)?)
+    }
+
+    /// The rollout with every vertex made of the preset `material` (the material a
+    /// dataset's sequence was simulated in, which `weft eval` rolls HOOD out in).
+    fn animate_in(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+        material: &str,
+    ) -> Result<Frames, ModelError> {
+        let material = Material::preset(material)
+            .map_err(|e| ModelError::Config(format!("the garment's material: {e}")))?;
+        let scene = self.scene_in(garment, body, clip, &Materials::Uniform(material))?;
+        Self::frames(self.roll_out_scene(&scene)?)
     }
 
     /// Garment frames per second with `batch` copies of the garment advanced in one
@@ -270,6 +304,26 @@ mod tests {
             device,
             checkpoint: PathBuf::from("untrained"),
         }
+    }
+
+    /// `weft eval` rolls HOOD out in the material a sequence was simulated in: in HOOD's
+    /// own material (the predictor's default) the frames are `animate`'s, in silk the
+    /// objective's steps differ (the untrained network's zero output does not read its
+    /// inputs), and a name that is no preset is an error.
+    #[test]
+    fn a_sequence_is_rolled_out_in_its_own_material() {
+        let (body, skirt) = crate::hood::testutil::body_and_skirt(320);
+        let (poses, trans) = crate::hood::testutil::still(3);
+        let clip = crate::hood::testutil::clip(&poses, &trans);
+        let mut p = predictor();
+        p.options.objective = true;
+        let own = p.animate(&skirt, &body, &clip).unwrap();
+        assert!(p.animate_in(&skirt, &body, &clip, "hood").unwrap() == own);
+        let silk = p.animate_in(&skirt, &body, &clip, "silk").unwrap();
+        assert_eq!(silk.len(), own.len());
+        assert!(silk != own, "silk rolled out as HOOD's material");
+        let e = p.animate_in(&skirt, &body, &clip, "tweed").unwrap_err();
+        assert!(e.to_string().contains("tweed"), "{e}");
     }
 
     #[test]
