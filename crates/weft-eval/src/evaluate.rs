@@ -17,7 +17,7 @@ use weft_body::query::BodySurface;
 use weft_body::{BodyModel, PosedSequence};
 use weft_data::{Dataset, Sequence, Split};
 use weft_mesh::TriMesh;
-use weft_models::{Clip, Deformer, Frames};
+use weft_models::{Clip, Deformer, Frames, StepJudge};
 use weft_render::{Colormap, Report};
 
 use crate::error::EvalError;
@@ -40,10 +40,14 @@ pub struct EvalOptions {
     pub fps_frames: usize,
     /// The command line that reproduces the evaluation, for the report.
     pub command: String,
+    /// Score every method's steps by the judge's potential when one is given (one
+    /// implicit Euler step per frame and method: the slow part of a HOOD evaluation).
+    pub potential: bool,
 }
 
 impl Default for EvalOptions {
-    /// The test split, every sequence, collisions on, batches 1 and 16 over 32 frames.
+    /// The test split, every sequence, collisions on, batches 1 and 16 over 32 frames,
+    /// the steps' potential scored when there is a judge.
     fn default() -> Self {
         EvalOptions {
             split: Split::Test,
@@ -52,6 +56,7 @@ impl Default for EvalOptions {
             fps_batches: vec![1, 16],
             fps_frames: 32,
             command: String::new(),
+            potential: true,
         }
     }
 }
@@ -111,9 +116,11 @@ impl ByKind {
 
 /// Evaluates `methods` (the first is the run's model, named by `run_dir`) on
 /// `opts.split` of `dataset`, reporting progress through `progress` (one line per
-/// sequence).
+/// sequence); with a `judge`, every method's steps are also scored by its potential
+/// ([`Evaluator::judged_by`]).
 pub fn evaluate(
     methods: &[&dyn Deformer],
+    judge: Option<&dyn StepJudge>,
     run_dir: &Path,
     dataset: &Dataset,
     opts: &EvalOptions,
@@ -138,6 +145,9 @@ pub fn evaluate(
     }
     let total = records.len();
     let mut ev = Evaluator::new(methods, &body, opts)?;
+    if let Some(judge) = judge.filter(|_| opts.potential) {
+        ev = ev.judged_by(judge);
+    }
     for (k, record) in records.iter().enumerate() {
         let started = Instant::now();
         let seq = dataset.load(record)?;
@@ -172,6 +182,7 @@ pub struct Evaluator<'a> {
     methods: &'a [&'a dyn Deformer],
     body: &'a BodyModel,
     opts: &'a EvalOptions,
+    judge: Option<&'a dyn StepJudge>,
     scores: Vec<ByKind>,
     fps: Vec<Vec<weft_models::Timing>>,
     example: Option<Example>,
@@ -205,6 +216,7 @@ impl<'a> Evaluator<'a> {
             methods,
             body,
             opts,
+            judge: None,
             scores: methods.iter().map(|_| ByKind::default()).collect(),
             fps: methods.iter().map(|_| Vec::new()).collect(),
             example: None,
@@ -212,6 +224,13 @@ impl<'a> Evaluator<'a> {
             sequences: 0,
             per_sequence: Vec::new(),
         })
+    }
+
+    /// Also scores every method's steps by `judge`'s potential: per step, how far above
+    /// its minimiser from the method's own state it lies ([`StepJudge`]).
+    pub fn judged_by(mut self, judge: &'a dyn StepJudge) -> Self {
+        self.judge = Some(judge);
+        self
     }
 
     /// Animates `seq` with every method (in the material it was simulated in, for a
@@ -265,6 +284,18 @@ impl<'a> Evaluator<'a> {
         match (&bodies, self.opts.collisions) {
             (Some(b), true) => b.for_each_surface(|t, s| score(t, Some(s)))?,
             _ => (0..seq.positions.len()).try_for_each(|t| score(t, None))?,
+        }
+        if let Some(judge) = self.judge {
+            for (scores, frames) in this.iter_mut().zip(&predicted) {
+                let material = &seq.record.material;
+                scores.push_potential_gaps(&judge.potential_gaps(
+                    &seq.garment,
+                    body,
+                    &clip,
+                    material,
+                    frames,
+                )?);
+            }
         }
         for (scores, m) in self.scores.iter_mut().zip(&this) {
             scores.get(&kind).merge(m);

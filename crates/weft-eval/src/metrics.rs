@@ -209,6 +209,7 @@ pub struct FrameMetrics {
     collision_checked: u64,
     frames: u64,
     nonfinite: u64,
+    potential_gap: Accumulator,
 }
 
 impl FrameMetrics {
@@ -264,6 +265,11 @@ impl FrameMetrics {
         Ok(())
     }
 
+    /// Adds the steps' potential gaps (J) a [`weft_models::StepJudge`] found.
+    pub fn push_potential_gaps(&mut self, gaps: &[f64]) {
+        self.potential_gap.extend(gaps.iter().copied());
+    }
+
     /// Adds everything `other` accumulated.
     pub fn merge(&mut self, other: &FrameMetrics) {
         self.verts.merge(&other.verts);
@@ -274,6 +280,7 @@ impl FrameMetrics {
         self.collision_checked += other.collision_checked;
         self.frames += other.frames;
         self.nonfinite += other.nonfinite;
+        self.potential_gap.merge(&other.potential_gap);
     }
 
     /// Frames added so far.
@@ -295,6 +302,7 @@ impl FrameMetrics {
             frames: self.frames,
             nonfinite_vertices: self.nonfinite,
             undefined_normals: self.undefined_normals,
+            potential_gap_j: (self.potential_gap.count() > 0).then(|| self.potential_gap.summary()),
         }
     }
 }
@@ -318,6 +326,10 @@ pub struct MetricsSummary {
     /// Vertices whose normal is undefined (no face of non-zero area) in prediction or
     /// ground truth (left out of `E_norm`).
     pub undefined_normals: u64,
+    /// Per step, its incremental potential less the minimum (J), when a judge scored
+    /// the steps (`weft eval` of a HOOD run).
+    #[serde(default)]
+    pub potential_gap_j: Option<Summary>,
 }
 
 #[cfg(test)]

@@ -147,6 +147,14 @@ impl EvalReport {
             ]
             .map(String::from),
         );
+        // The steps' potential, when a judge scored them (a HOOD run's evaluation).
+        let judged = self
+            .methods
+            .iter()
+            .any(|m| m.overall.potential_gap_j.is_some());
+        if judged {
+            header.push("step potential above its minimum (J)".to_owned());
+        }
         let lbs = self.method(LBS_NAME).map(|m| m.overall);
         let rows = self
             .methods
@@ -174,6 +182,13 @@ impl EvalReport {
                 } else {
                     pct(lbs.as_ref().and_then(|b| reduction(&m.overall, b)), 1)
                 });
+                if judged {
+                    row.push(
+                        m.overall
+                            .potential_gap_j
+                            .map_or("–".to_owned(), |s| s.mean_std(4)),
+                    );
+                }
                 row
             })
             .collect();

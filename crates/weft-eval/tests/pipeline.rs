@@ -11,7 +11,7 @@ use weft_eval::LBS_NAME;
 use weft_garment::{FitBody, GarmentKind, Style};
 use weft_mesh::TriMesh;
 use weft_models::multilevel::{Multilevel, MultilevelConfig, Predictor};
-use weft_models::{Clip, Deformer, SkinningBaseline, DQS_NAME};
+use weft_models::{Clip, Deformer, Frames, ModelError, SkinningBaseline, StepJudge, DQS_NAME};
 use weft_motion::{generate, MotionKind, ProceduralParams};
 
 struct TempDir(PathBuf);
@@ -60,6 +60,29 @@ fn case(frames: usize) -> Case {
     }
 }
 
+impl Case {
+    fn clip(&self) -> Clip<'_> {
+        Clip {
+            betas: &[],
+            poses: &self.poses,
+            trans: &self.trans,
+            fps: 30.0,
+        }
+    }
+
+    /// The sequence of this case whose simulated frames are `positions`.
+    fn sequence(&self, frames: usize, positions: Frames) -> weft_data::Sequence {
+        weft_data::Sequence {
+            record: record(self, frames),
+            garment: self.garment.clone(),
+            corner_uvs: vec![],
+            poses: self.poses.clone(),
+            trans: self.trans.clone(),
+            positions,
+        }
+    }
+}
+
 fn record(c: &Case, frames: usize) -> SequenceRecord {
     SequenceRecord {
         id: "test-skirt-b0-walk".into(),
@@ -101,27 +124,14 @@ fn scores_a_known_truth_and_writes_the_report() {
     let c = case(frames);
     // Ground truth: the LBS baseline moved 1 cm along +X, so the baseline's error is
     // exactly 10 mm everywhere and its normals are exact.
-    let clip = Clip {
-        betas: &[],
-        poses: &c.poses,
-        trans: &c.trans,
-        fps: 30.0,
-    };
     let lbs = SkinningBaseline::LBS
-        .animate(&c.garment, &c.body, &clip)
+        .animate(&c.garment, &c.body, &c.clip())
         .unwrap();
     let truth: Vec<Vec<[f32; 3]>> = lbs
         .iter()
         .map(|f| f.iter().map(|p| [p[0] + 0.01, p[1], p[2]]).collect())
         .collect();
-    let seq = weft_data::Sequence {
-        record: record(&c, frames),
-        garment: c.garment.clone(),
-        corner_uvs: vec![],
-        poses: c.poses.clone(),
-        trans: c.trans.clone(),
-        positions: truth,
-    };
+    let seq = c.sequence(frames, truth);
     let p = predictor(false);
     let opts = EvalOptions {
         fps_batches: vec![1, 4],
@@ -138,14 +148,7 @@ fn scores_a_known_truth_and_writes_the_report() {
     // DQS differs from LBS where the walk bends the hips, by less than the offset.
     assert!(dqs_mm > 5.0 && (dqs_mm - lbs_mm).abs() > 1e-4, "{dqs_mm}");
     // A diverged sequence: the frames before the divergence are scored.
-    let mut cut = weft_data::Sequence {
-        record: record(&c, frames),
-        garment: c.garment.clone(),
-        corner_uvs: vec![],
-        poses: c.poses.clone(),
-        trans: c.trans.clone(),
-        positions: lbs[..2].to_vec(),
-    };
+    let mut cut = c.sequence(frames, lbs[..2].to_vec());
     ev.add(cut.clone()).unwrap();
     cut.positions.clear();
     assert!(ev.add(cut).is_err());
@@ -214,12 +217,7 @@ fn scores_a_known_truth_and_writes_the_report() {
 fn attribution_of_one_vertex_is_complete() {
     let c = case(3);
     let p = predictor(true);
-    let clip = Clip {
-        betas: &[],
-        poses: &c.poses,
-        trans: &c.trans,
-        fps: 30.0,
-    };
+    let clip = c.clip();
     let a = explain_vertex(p.model(), &c.garment, &c.body, &clip, 17, 2, 8).unwrap();
     assert_eq!(a.scores.len(), c.garment.vertex_count());
     assert_eq!(a.attribution.cols, 6 + 24);
@@ -232,4 +230,66 @@ fn attribution_of_one_vertex_is_complete() {
         "gap {gap}, change {change}"
     );
     assert!(explain_vertex(p.model(), &c.garment, &c.body, &clip, 100_000, 0, 4).is_err());
+}
+
+/// Scores every step of a sequence by its frame count, after checking it was told the
+/// sequence's material: the plumbing, not the physics (HOOD's judge has its own tests).
+struct CountingJudge;
+
+impl StepJudge for CountingJudge {
+    fn potential_gaps(
+        &self,
+        _garment: &TriMesh,
+        _body: &weft_body::BodyModel,
+        _clip: &Clip,
+        material: &str,
+        frames: &Frames,
+    ) -> Result<Vec<f64>, ModelError> {
+        assert_eq!(material, "cotton");
+        Ok(vec![frames.len() as f64; frames.len().saturating_sub(2)])
+    }
+}
+
+#[test]
+fn a_judge_scores_every_methods_steps() {
+    let frames = 6;
+    let c = case(frames);
+    let truth = SkinningBaseline::LBS
+        .animate(&c.garment, &c.body, &c.clip())
+        .unwrap();
+    let seq = c.sequence(frames, truth);
+    let opts = EvalOptions {
+        fps_batches: vec![],
+        ..EvalOptions::default()
+    };
+    let methods: [&dyn Deformer; 2] = [&SkinningBaseline::LBS, &SkinningBaseline::DQS];
+    let column = "step potential above its minimum (J)";
+    // Without a judge, no figure and no column.
+    let mut plain = Evaluator::new(&methods, &c.body, &opts).unwrap();
+    plain.add(seq.clone()).unwrap();
+    let r = plain.finish("RUN", "DATA").report;
+    assert!(r
+        .methods
+        .iter()
+        .all(|m| m.overall.potential_gap_j.is_none()));
+    assert!(!r.table().0.iter().any(|h| h == column));
+    let mut judged = Evaluator::new(&methods, &c.body, &opts)
+        .unwrap()
+        .judged_by(&CountingJudge);
+    judged.add(seq).unwrap();
+    let r = judged.finish("RUN", "DATA").report;
+    for m in &r.methods {
+        let g = m
+            .overall
+            .potential_gap_j
+            .expect("the judge scored the steps");
+        assert_eq!((g.count, g.mean), (frames as u64 - 2, frames as f64));
+    }
+    let (header, rows) = r.table();
+    assert_eq!(header.last().map(String::as_str), Some(column));
+    assert!(
+        rows[0].last().unwrap().starts_with("6.0000"),
+        "{:?}",
+        rows[0]
+    );
 }

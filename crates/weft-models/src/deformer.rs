@@ -103,6 +103,24 @@ pub struct Timing {
     pub frames: usize,
 }
 
+/// The physics the steps of any method's frames are scored by (seed 004's objective):
+/// how far above its minimiser each step's incremental potential is.
+pub trait StepJudge: Sync {
+    /// For each step `t → t + 1` of `frames` from `t = 1` (the state `frames[t − 1]`,
+    /// `frames[t]`, the garment made of the preset `material`): the step's incremental
+    /// potential at `frames[t + 1]` less its minimum (J), the minimiser found by
+    /// weft-sim's implicit Euler from the same state. Zero for a method whose every step
+    /// is that minimiser.
+    fn potential_gaps(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+        material: &str,
+        frames: &Frames,
+    ) -> Result<Vec<f64>, ModelError>;
+}
+
 /// A system that deforms a garment with a body; see the module documentation.
 pub trait Deformer: Sync {
     /// The name in tables and pictures (e.g. "Multilevel", "LBS only").

@@ -26,7 +26,7 @@ pub mod refine;
 pub mod run;
 
 pub use baseline::{SkinningBaseline, DQS_NAME, LBS_NAME};
-pub use deformer::{Clip, Deformer, Frames, Timing};
+pub use deformer::{Clip, Deformer, Frames, StepJudge, Timing};
 pub use error::ModelError;
 pub use kind::{ModelKind, UnknownModelKind};
 pub use load::load_deformer;

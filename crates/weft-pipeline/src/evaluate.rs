@@ -9,7 +9,7 @@ use weft_eval::evaluate::{evaluate, write_report, EvalOptions, Evaluation};
 use weft_models::garfitnet::GarFitPredictor;
 use weft_models::hood::{HoodPredictor, RolloutOptions};
 use weft_models::run::read_run_config;
-use weft_models::{load_deformer, Deformer, ModelKind, SkinningBaseline};
+use weft_models::{load_deformer, Deformer, ModelKind, SkinningBaseline, StepJudge};
 
 use crate::error::{stage, PipelineError};
 
@@ -35,13 +35,17 @@ pub fn evaluate_run(
         ModelKind::GarFitNet => Some(GarFitPredictor::load(run).map_err(stage(&loading()))?),
         _ => None,
     };
-    let model: Option<Box<dyn Deformer + Send>> = match kind {
-        ModelKind::GarFitNet => None,
+    // A HOOD run is kept as itself: its objective also judges every method's steps.
+    let hood_model = match kind {
         ModelKind::Hood => {
             let mut h = HoodPredictor::load(run).map_err(stage(&loading()))?;
             h.options = *hood;
-            Some(Box::new(h))
+            Some(h)
         }
+        _ => None,
+    };
+    let model: Option<Box<dyn Deformer + Send>> = match kind {
+        ModelKind::GarFitNet | ModelKind::Hood => None,
         _ => Some(load_deformer(run).map_err(stage(&loading()))?),
     };
     let objective = match (kind, objective) {
@@ -68,6 +72,9 @@ pub fn evaluate_run(
     if let Some(m) = &model {
         methods.push(m.as_ref());
     }
+    if let Some(h) = &hood_model {
+        methods.push(h);
+    }
     if let Some(o) = &objective {
         methods.push(o);
     }
@@ -75,7 +82,9 @@ pub fn evaluate_run(
         &SkinningBaseline::LBS as &dyn Deformer,
         &SkinningBaseline::DQS,
     ]);
-    let eval = evaluate(&methods, run, &dataset, opts, progress)?;
+    // A HOOD run's objective scores every method's steps (issue 12 item 8).
+    let judge = hood_model.as_ref().map(|h| h as &dyn StepJudge);
+    let eval = evaluate(&methods, judge, run, &dataset, opts, progress)?;
     let html = write_report(&eval, &run.join("report"))?;
     Ok((eval, html))
 }

@@ -47,6 +47,10 @@ pub struct EvalArgs {
     /// Skip timing inference.
     #[arg(long)]
     no_timing: bool,
+    /// HOOD runs: skip scoring every method's steps by the run's potential (how far
+    /// above its minimiser each step lies; one implicit Euler step per frame and method).
+    #[arg(long)]
+    no_potential: bool,
     /// Print the report (or the comparison) as JSON on stdout.
     #[arg(long)]
     json: bool,
@@ -220,6 +224,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         collisions: !args.no_collisions,
         fps_batches: if args.no_timing { vec![] } else { vec![1, 16] },
         command: command_line(),
+        potential: !args.no_potential,
         ..EvalOptions::default()
     };
     if !args.compare {

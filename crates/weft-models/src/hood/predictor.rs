@@ -8,14 +8,14 @@ use std::path::{Path, PathBuf};
 use burn::tensor::Device;
 use weft_body::BodyModel;
 use weft_mesh::TriMesh;
-use weft_sim::{Attachment, Material};
+use weft_sim::{Attachment, Energy, Material};
 
 use super::config::HoodConfig;
 use super::model::InferHood;
 use super::rollout::{roll_out, Rollout, RolloutOptions};
-use super::scene::{Materials, Scene};
+use super::scene::{Materials, Scene, StateRef, StepAt};
 use super::stats::{HoodStats, STATS_FILE};
-use crate::deformer::{Clip, Deformer, Frames, Timing};
+use crate::deformer::{Clip, Deformer, Frames, StepJudge, Timing};
 use crate::error::ModelError;
 use crate::kind::ModelKind;
 use crate::refine::predictor::load_record;
@@ -157,6 +157,72 @@ impl HoodPredictor {
             &self.options,
             &self.device,
         )
+    }
+}
+
+/// The run's objective as the judge of any method's steps (`weft eval` of a HOOD run):
+/// the scene in the sequence's material, the potential of each step from the method's
+/// own state. Unbuttoned throughout (a dataset's garments have no buttons).
+impl StepJudge for HoodPredictor {
+    fn potential_gaps(
+        &self,
+        garment: &TriMesh,
+        body: &BodyModel,
+        clip: &Clip,
+        material: &str,
+        frames: &Frames,
+    ) -> Result<Vec<f64>, ModelError> {
+        let material = Material::preset(material)
+            .map_err(|e| ModelError::Config(format!("the garment's material: {e}")))?;
+        let scene = Scene::new(
+            garment,
+            body,
+            clip,
+            &Materials::Uniform(material),
+            self.attachment,
+            &self.config,
+        )?;
+        if scene.steps_per_frame() != 1.0 {
+            return Err(ModelError::Config(format!(
+                "the steps' potential needs one step a frame: the motion is at {} fps, the run steps at {}",
+                clip.fps, self.config.step_fps
+            )));
+        }
+        let x: Vec<Vec<[f64; 3]>> = frames
+            .iter()
+            .map(|f| f.iter().map(|p| p.map(f64::from)).collect())
+            .collect();
+        let steps = x.len().min(scene.frames()).saturating_sub(1);
+        (1..steps)
+            .map(|t| {
+                let state = StateRef {
+                    prev: &x[t - 1],
+                    cur: &x[t],
+                };
+                let at = StepAt {
+                    t,
+                    settle: false,
+                    dt: scene.dt,
+                    buttoned: false,
+                };
+                let body = scene.contact_body(at)?;
+                let potential = scene.step_potential(state, at, body.as_ref())?;
+                let best = scene.implicit_step(state, at, body.as_ref())?;
+                // The method's step with its pinned vertices where the potential holds them.
+                let taken: Vec<[f64; 3]> = (0..x[t + 1].len())
+                    .map(|i| match scene.garment.pinned[i] {
+                        true => best[i],
+                        false => x[t + 1][i],
+                    })
+                    .collect();
+                let value = |y: &[[f64; 3]]| {
+                    potential.value(y).map_err(|e| {
+                        ModelError::Garment(format!("the potential of frame {}: {e}", t + 1))
+                    })
+                };
+                Ok(value(&taken)? - value(&best)?)
+            })
+            .collect()
     }
 }
 
@@ -324,6 +390,30 @@ mod tests {
         assert!(silk != own, "silk rolled out as HOOD's material");
         let e = p.animate_in(&skirt, &body, &clip, "tweed").unwrap_err();
         assert!(e.to_string().contains("tweed"), "{e}");
+    }
+
+    /// The judge of `weft eval`: the objective's own frames (no projection) lie at the
+    /// minimum of every step's potential, the untrained network's coasting ones above
+    /// it, and steps at another rate than the run's are refused.
+    #[test]
+    fn the_objective_judges_steps_by_their_potential() {
+        let (body, skirt) = crate::hood::testutil::body_and_skirt(320);
+        let (poses, trans) = crate::hood::testutil::still(5);
+        let clip = crate::hood::testutil::clip(&poses, &trans);
+        let mut p = predictor();
+        p.options.projection = false;
+        let coasting = p.animate(&skirt, &body, &clip).unwrap();
+        p.options.objective = true;
+        let solved = p.animate(&skirt, &body, &clip).unwrap();
+        let gaps = |frames: &Frames| p.potential_gaps(&skirt, &body, &clip, "hood", frames);
+        let (coast, best) = (gaps(&coasting).unwrap(), gaps(&solved).unwrap());
+        assert_eq!((coast.len(), best.len()), (3, 3));
+        assert!(best.iter().all(|g| g.abs() < 1e-6), "{best:?}");
+        assert!(coast.iter().all(|&g| g > 1e-4), "{coast:?}");
+        let fast = Clip { fps: 60.0, ..clip };
+        assert!(p
+            .potential_gaps(&skirt, &body, &fast, "hood", &solved)
+            .is_err());
     }
 
     #[test]

@@ -17,8 +17,8 @@ use weft_body::{BodyModel, Pose};
 use weft_garment::onbody::push_out;
 use weft_mesh::TriMesh;
 use weft_sim::{
-    check_garment_gap, Attachment, BodyProximity, ClothModel, ClothSimulator, Material, PosedBody,
-    SimOptions, SweptBody,
+    check_garment_gap, Attachment, BodyProximity, ClothModel, ClothSimulator, IncrementalPotential,
+    Material, PosedBody, SimOptions, StepInputs, SweptBody,
 };
 
 use super::config::HoodConfig;
@@ -420,6 +420,35 @@ impl Scene {
         body: &(dyn BodyProximity + Sync),
     ) -> Result<Vec<[f64; 3]>, ModelError> {
         self.solve_step(state, at, body, None)
+    }
+
+    /// The incremental potential of step `at` from `state` (HOOD's loss, weft-sim's
+    /// objective): inertial target `x_t + (x_t − x_{t−1})`, pinned vertices at their
+    /// targets, contacts against the step's [`Scene::contact_body`] `body`.
+    pub fn step_potential(
+        &self,
+        state: StateRef,
+        at: StepAt,
+        body: &(dyn BodyProximity + Sync),
+    ) -> Result<IncrementalPotential, ModelError> {
+        let next = if at.settle { at.t } else { at.t + 1 };
+        let targets = &self.skinned[next];
+        let target: Vec<[f64; 3]> = (0..state.cur.len())
+            .map(|i| match self.garment.pinned[i] {
+                true => targets[i],
+                false => std::array::from_fn(|k| 2.0 * state.cur[i][k] - state.prev[i][k]),
+            })
+            .collect();
+        self.cloth_at(at)
+            .step_potential(&StepInputs {
+                start: state.cur,
+                target: &target,
+                dt: at.dt,
+                pinned: &self.garment.pinned,
+                body: Some(body),
+                collision_stiffness: None,
+            })
+            .map_err(|e| ModelError::Garment(format!("the step's potential: {e}")))
     }
 
     /// The step `at` from `state` refined from `predicted` (a network's step) by at most
