@@ -235,9 +235,8 @@ impl<'a> Evaluator<'a> {
 
     /// Animates `seq` with every method (in the material it was simulated in, for a
     /// method that takes one: [`Deformer::animate_in`]) and scores each against its
-    /// simulated frames;
-    /// times inference on the first sequence. Returns each method's mean vertex error
-    /// (mm) on this sequence.
+    /// simulated frames; times inference on the first sequence. Returns each method's
+    /// mean vertex error (mm) on this sequence.
     pub fn add(&mut self, mut seq: Sequence) -> Result<Vec<f64>, EvalError> {
         let body = self.body;
         if seq.positions.is_empty() || seq.positions.len() > seq.poses.len() {
