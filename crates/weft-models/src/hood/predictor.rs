@@ -160,6 +160,13 @@ impl HoodPredictor {
     }
 }
 
+/// Every vertex made of the weft-sim preset `name` (a dataset's recorded material).
+fn preset(name: &str) -> Result<Materials, ModelError> {
+    Material::preset(name)
+        .map(Materials::Uniform)
+        .map_err(|e| ModelError::Config(format!("the garment's material: {e}")))
+}
+
 /// The run's objective as the judge of any method's steps (`weft eval` of a HOOD run):
 /// the scene in the sequence's material, the potential of each step from the method's
 /// own state. Unbuttoned throughout (a dataset's garments have no buttons).
@@ -172,13 +179,11 @@ impl StepJudge for HoodPredictor {
         material: &str,
         frames: &Frames,
     ) -> Result<Vec<f64>, ModelError> {
-        let material = Material::preset(material)
-            .map_err(|e| ModelError::Config(format!("the garment's material: {e}")))?;
         let scene = Scene::new(
             garment,
             body,
             clip,
-            &Materials::Uniform(material),
+            &preset(material)?,
             self.attachment,
             &self.config,
         )?;
@@ -299,9 +304,7 @@ impl Deformer for HoodPredictor {
         clip: &Clip,
         material: &str,
     ) -> Result<Frames, ModelError> {
-        let material = Material::preset(material)
-            .map_err(|e| ModelError::Config(format!("the garment's material: {e}")))?;
-        let scene = self.scene_in(garment, body, clip, &Materials::Uniform(material))?;
+        let scene = self.scene_in(garment, body, clip, &preset(material)?)?;
         Self::frames(self.roll_out_scene(&scene)?)
     }
 

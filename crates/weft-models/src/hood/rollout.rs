@@ -534,22 +534,15 @@ pub fn roll_out(
         }
         let mut steps = Vec::with_capacity(active.len());
         for &k in &active {
-            let frames = &out[k].frames;
-            let cur = &frames[t];
-            let prev = if t == 0 { &before[k] } else { &frames[t - 1] };
-            steps.push(scenes[k].step(StateRef { prev, cur }, step_at(k, t), config)?);
+            let state = state_at(&before[k], &out[k].frames, t);
+            steps.push(scenes[k].step(state, step_at(k, t), config)?);
         }
         let next = predict(&steps)?;
         for (&k, x) in active.iter().zip(next) {
             let mut x = match iterations {
                 0 => x,
                 iterations => {
-                    let frames = &out[k].frames;
-                    let prev = if t == 0 { &before[k] } else { &frames[t - 1] };
-                    let state = StateRef {
-                        prev,
-                        cur: &frames[t],
-                    };
+                    let state = state_at(&before[k], &out[k].frames, t);
                     let at = step_at(k, t);
                     let body = scenes[k].contact_body(at)?;
                     match scenes[k].refine_step(state, at, body.as_ref(), &x, iterations) {
@@ -577,6 +570,15 @@ pub fn roll_out(
         .zip(scenes)
         .map(|(r, s)| r.motion_frames(s.steps_per_frame(), s.motion_frames))
         .collect())
+}
+
+/// A rollout's state at step `t`: its frames `t − 1` and `t`, with `before` (frame −1)
+/// for the first step.
+fn state_at<'a>(before: &'a [[f64; 3]], frames: &'a [Vec<[f64; 3]>], t: usize) -> StateRef<'a> {
+    StateRef {
+        prev: if t == 0 { before } else { &frames[t - 1] },
+        cur: &frames[t],
+    }
 }
 
 impl Rollout {

@@ -17,8 +17,8 @@ use weft_body::{BodyModel, Pose};
 use weft_garment::onbody::push_out;
 use weft_mesh::TriMesh;
 use weft_sim::{
-    check_garment_gap, Attachment, BodyProximity, ClothModel, ClothSimulator, IncrementalPotential,
-    Material, PosedBody, SimOptions, StepInputs, SweptBody,
+    check_garment_gap, inertial_target, Attachment, BodyProximity, ClothModel, ClothSimulator,
+    IncrementalPotential, Material, PosedBody, SimOptions, StepInputs, SweptBody,
 };
 
 use super::config::HoodConfig;
@@ -431,14 +431,13 @@ impl Scene {
         at: StepAt,
         body: &(dyn BodyProximity + Sync),
     ) -> Result<IncrementalPotential, ModelError> {
+        let failed =
+            |e: weft_sim::SimError| ModelError::Garment(format!("the step's potential: {e}"));
         let next = if at.settle { at.t } else { at.t + 1 };
-        let targets = &self.skinned[next];
-        let target: Vec<[f64; 3]> = (0..state.cur.len())
-            .map(|i| match self.garment.pinned[i] {
-                true => targets[i],
-                false => std::array::from_fn(|k| 2.0 * state.cur[i][k] - state.prev[i][k]),
-            })
-            .collect();
+        let mut target = inertial_target(state.cur, state.prev, 1.0).map_err(failed)?;
+        for (i, _) in self.garment.pinned.iter().enumerate().filter(|(_, &p)| p) {
+            target[i] = self.skinned[next][i];
+        }
         self.cloth_at(at)
             .step_potential(&StepInputs {
                 start: state.cur,
@@ -448,7 +447,7 @@ impl Scene {
                 body: Some(body),
                 collision_stiffness: None,
             })
-            .map_err(|e| ModelError::Garment(format!("the step's potential: {e}")))
+            .map_err(failed)
     }
 
     /// The step `at` from `state` refined from `predicted` (a network's step) by at most
