@@ -167,7 +167,16 @@ fn hood_trains_resumes_and_animates() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("6 frames"), "{}", stdout(&o));
     let silk = dir.join("silk.pc2");
-    assert!(anim(&["--material", "silk"], &silk).status.success());
+    assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
+    let o = anim(&["--material", "silk"], &silk);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Silk is stiffer than any material of HOOD's ranges: said, and read as the
+    // nearest one inside.
+    let e = stderr(&o);
+    assert!(
+        e.contains("warning: --material silk: μ 245.") && e.contains("nearest material inside"),
+        "{e}"
+    );
     // The material enters the network: the frames differ.
     assert_ne!(
         std::fs::read(&plain).unwrap(),

@@ -61,6 +61,21 @@ pub fn evaluate_run(
     };
     let dataset =
         Dataset::open(data).map_err(stage(&format!("opening dataset {}", data.display())))?;
+    if let Some(h) = &hood_model {
+        let mut names: Vec<&str> = dataset
+            .records()
+            .iter()
+            .map(|r| r.material.as_str())
+            .collect();
+        names.sort_unstable();
+        names.dedup();
+        for note in h.presets_outside(&names) {
+            progress(&format!(
+                "warning: {note}: outside the materials {} was trained on; its network reads it as the nearest material inside",
+                run.display()
+            ));
+        }
+    }
     let coarse = garfit.as_ref().map(GarFitPredictor::coarse_stage);
     let mut methods: Vec<&dyn Deformer> = Vec::new();
     if let Some(g) = &garfit {

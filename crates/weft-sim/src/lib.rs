@@ -72,8 +72,8 @@ pub use face_contact::FaceContact;
 pub use friction::{Friction, FrictionContact};
 pub use gravity::{lumped_masses, Gravity, STANDARD_GRAVITY};
 pub use hood_material::{
-    hood_inputs, sample_hood_material, MaterialSampler, HOOD_BENDING_RANGE, HOOD_DENSITY_RANGE,
-    HOOD_LAMBDA_RANGE, HOOD_MU_RANGE,
+    MaterialRanges, MaterialSampler, HOOD_BENDING_RANGE, HOOD_DENSITY_RANGE, HOOD_LAMBDA_RANGE,
+    HOOD_MU_RANGE,
 };
 pub use inertia::{inertial_target, Inertia};
 pub use material::Material;

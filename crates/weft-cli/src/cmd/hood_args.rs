@@ -103,6 +103,9 @@ impl HoodArgs {
                     .collect(),
             ),
         };
+        for note in hood.materials_outside() {
+            eprintln!("warning: --material {note}: {OUTSIDE}");
+        }
         if let Some(path) = &self.buttons {
             hood.buttons = buttons(path)?;
         }
@@ -114,6 +117,11 @@ impl HoodArgs {
         Ok(())
     }
 }
+
+/// What a material outside the run's material space means for the rollout.
+pub(super) const OUTSIDE: &str = "outside the materials the run was trained on; the \
+network reads it as the nearest material inside, its physics (loss, --refine, \
+--objective) stays its own";
 
 /// `--strain-limit PERCENT` and `--compression-limit PERCENT` (`weft animate`, `weft
 /// eval`) as fractions of the rest length.

@@ -12,6 +12,7 @@ use burn::module::Param;
 use burn::tensor::Device;
 use weft_motion::MAX_FPS;
 use weft_nn::{MlpConfig, ProcessorConfig};
+use weft_sim::MaterialRanges;
 
 use super::model::Hood;
 use crate::error::ModelError;
@@ -96,6 +97,12 @@ pub struct HoodConfig {
     /// (`--push-out`).
     #[config(default = "None")]
     pub project_margin: Option<f64>,
+    /// The material space (`[model.materials]`): where training draws its materials and
+    /// the scale the network reads a material on. Default HOOD's ranges (runs written
+    /// before it). A material outside is read as the nearest one inside
+    /// ([`Materials::inputs`](super::scene::Materials::inputs)).
+    #[config(default = "MaterialRanges::hood()")]
+    pub materials: MaterialRanges,
 }
 
 /// A parsed schedule: for each message-passing step, the mesh levels it reads.
@@ -187,6 +194,7 @@ impl HoodConfig {
                 )));
             }
         }
+        self.materials.validate().map_err(ModelError::Config)?;
         self.parse_schedule().map(|_| ())
     }
 
@@ -300,6 +308,36 @@ pub fn parse_schedule(text: &str, levels: usize) -> Result<Schedule, ModelError>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `[model.materials]`: absent (runs written before it) gives HOOD's ranges; a
+    /// partial table keeps HOOD's for the fields it leaves out; a bad range and an
+    /// unknown key name the field.
+    #[test]
+    fn material_space_reads_from_model_and_defaults_to_hoods() {
+        let read = |text: &str| {
+            let file: toml::Table = toml::from_str(text).unwrap();
+            weft_config::overlay(
+                &HoodConfig::preset("cpu").unwrap(),
+                &file,
+                "run.toml",
+                "model",
+            )
+        };
+        assert_eq!(read("").unwrap().materials, MaterialRanges::hood());
+        let wide = read("[materials]\nmu = [15909.0, 300000.0]\n").unwrap();
+        assert_eq!(wide.materials.mu, [15_909.0, 300_000.0]);
+        assert_eq!(wide.materials.lambda, MaterialRanges::hood().lambda);
+        let e = read("[materials]\nmu = [3.0, 1.0]\n")
+            .unwrap()
+            .validate()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("materials.mu = [3, 1]"), "{e}");
+        let e = read("[materials]\nmus = [1.0, 3.0]\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("materials.mus"), "{e}");
+    }
 
     #[test]
     fn the_untrained_decoder_outputs_zero_and_learns() {

@@ -92,6 +92,24 @@ impl HoodPredictor {
         self.scene_in(garment, body, clip, &self.materials)
     }
 
+    /// The garment's materials that lie outside the run's material space, with what
+    /// lies outside; the network reads each as the nearest material inside
+    /// ([`Materials::inputs`]). Empty when all lie inside.
+    pub fn materials_outside(&self) -> Vec<String> {
+        self.materials.outside(&self.config.materials)
+    }
+
+    /// [`HoodPredictor::materials_outside`] for garments made of each weft-sim preset
+    /// of `names` in turn (a dataset's materials); names that are no preset are left to
+    /// the rollout, which refuses them.
+    pub fn presets_outside(&self, names: &[&str]) -> Vec<String> {
+        names
+            .iter()
+            .filter_map(|name| preset(name).ok())
+            .flat_map(|m| m.outside(&self.config.materials))
+            .collect()
+    }
+
     /// The [`HoodPredictor::scene`] with `materials` in place of the predictor's.
     fn scene_in(
         &self,
@@ -393,6 +411,25 @@ mod tests {
         assert!(silk != own, "silk rolled out as HOOD's material");
         let e = p.animate_in(&skirt, &body, &clip, "tweed").unwrap_err();
         assert!(e.to_string().contains("tweed"), "{e}");
+    }
+
+    /// The presets a dataset names, checked against the run's material space (what
+    /// `weft eval` warns of): silk and denim lie outside HOOD's ranges, HOOD's own
+    /// material and an unknown name give nothing; a space that reaches silk takes it in.
+    #[test]
+    fn presets_outside_the_material_space_are_named() {
+        let mut p = predictor();
+        let notes = p.presets_outside(&["denim", "hood", "silk", "tweed"]);
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        assert!(
+            notes[0].starts_with("denim: μ") && notes[1].starts_with("silk: μ"),
+            "{notes:?}"
+        );
+        p.config.materials.mu[1] = 300_000.0;
+        p.config.materials.lambda[1] = 300_000.0;
+        assert!(p.presets_outside(&["silk"]).is_empty());
+        p.materials = Materials::Uniform(Material::silk());
+        assert!(p.materials_outside().is_empty());
     }
 
     /// The judge of `weft eval`: the objective's own frames (no projection) lie at the

@@ -18,7 +18,7 @@ use weft_garment::onbody::push_out;
 use weft_mesh::TriMesh;
 use weft_sim::{
     check_garment_gap, inertial_target, Attachment, BodyProximity, ClothModel, ClothSimulator,
-    IncrementalPotential, Material, PosedBody, SimOptions, StepInputs, SweptBody,
+    IncrementalPotential, Material, MaterialRanges, PosedBody, SimOptions, StepInputs, SweptBody,
 };
 
 use super::config::HoodConfig;
@@ -45,6 +45,28 @@ pub enum Materials {
 }
 
 impl Materials {
+    /// Each distinct material that lies outside `ranges`, with what lies outside
+    /// ([`MaterialRanges::outside`]): `silk: μ 245.5 kPa (trained …), …`.
+    pub fn outside(&self, ranges: &MaterialRanges) -> Vec<String> {
+        let list: &[Material] = match self {
+            Materials::Uniform(m) => std::slice::from_ref(m),
+            Materials::PerVertex(m) => m,
+        };
+        let mut seen: Vec<&Material> = Vec::new();
+        let mut notes = Vec::new();
+        for m in list {
+            if seen.contains(&m) {
+                continue;
+            }
+            seen.push(m);
+            let out = ranges.outside(m);
+            if !out.is_empty() {
+                notes.push(format!("{}: {}", m.name, out.join(", ")));
+            }
+        }
+        notes
+    }
+
     /// The cloth physics of `rest` made of these materials; errors name the count.
     pub fn cloth(&self, rest: &TriMesh) -> Result<ClothModel, ModelError> {
         let sim = |e: weft_sim::SimError| ModelError::Garment(format!("garment physics: {e}"));
@@ -64,9 +86,14 @@ impl Materials {
         .map_err(sim)
     }
 
-    /// The network's material inputs of every vertex of a garment of `n` vertices.
-    pub fn inputs(&self, n: usize) -> Vec<[f32; 3]> {
-        let one = |m: &Material| weft_sim::hood_inputs(m).map(|x| x as f32);
+    /// The network's material inputs of every vertex of a garment of `n` vertices, on
+    /// the scale of `ranges` (the run's material space) and clamped to it: a material
+    /// outside is read as the nearest one the network was trained on, since beyond the
+    /// range its inputs would lie where no training sample did (silk in HOOD's ranges:
+    /// μ and λ at 2.0 and 2.3 on a [0, 1] scale; docs/hood.md item 19). Its physics
+    /// (the potential, `--refine`, the projection) stays its own.
+    pub fn inputs(&self, n: usize, ranges: &MaterialRanges) -> Vec<[f32; 3]> {
+        let one = |m: &Material| ranges.inputs(m).map(|x| x.clamp(0.0, 1.0) as f32);
         match self {
             Materials::Uniform(m) => vec![one(m); n],
             Materials::PerVertex(m) => m.iter().map(one).collect(),
@@ -215,7 +242,7 @@ impl Scene {
             config.levels,
             &pinned,
             cloth.masses().to_vec(),
-            materials.inputs(n),
+            materials.inputs(n, &config.materials),
         )?;
         let posed = weft_body::PosedSequence::new(body, clip.betas, clip.poses, clip.trans)
             .map_err(body_err("posing the body"))?;
@@ -530,6 +557,42 @@ fn hand_vertices(body: &BodyModel) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A material outside the run's space is read as the nearest one inside (silk in
+    /// HOOD's ranges: stiffest μ and λ, its own bending), one inside as itself; the
+    /// report names each distinct material outside once.
+    #[test]
+    fn materials_outside_the_space_are_clamped_and_named() {
+        let ranges = MaterialRanges::hood();
+        let silk = Materials::Uniform(Material::silk());
+        let x = silk.inputs(2, &ranges);
+        let own = ranges.inputs(&Material::silk());
+        assert_eq!(x[0], [own[0] as f32, 1.0, 1.0]);
+        assert!(own[1] > 1.5 && own[2] > 1.5, "{own:?}");
+        let hood = Materials::Uniform(Material::hood());
+        assert_eq!(
+            hood.inputs(1, &ranges)[0],
+            ranges.inputs(&Material::hood()).map(|v| v as f32)
+        );
+        assert!(hood.outside(&ranges).is_empty());
+        let map = Materials::PerVertex(vec![
+            Material::silk(),
+            Material::hood(),
+            Material::silk(),
+            Material::denim(),
+        ]);
+        let notes = map.outside(&ranges);
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        assert!(
+            notes[0].starts_with("silk: μ") && notes[1].starts_with("denim: μ"),
+            "{notes:?}"
+        );
+        let inputs = map.inputs(4, &ranges);
+        assert!(
+            inputs.iter().flatten().all(|v| (0.0..=1.0).contains(v)),
+            "{inputs:?}"
+        );
+    }
 
     /// A body that moves farther in a frame than it is deep sweeps the front of the
     /// skirt to its back: HOOD's contact at t + 1 lets it go, the swept body holds it

@@ -7,18 +7,18 @@
 //!   (procedural kinds, motion files). The normalisers are fitted on the start states of
 //!   the first samples (HOOD's warm-up gathers them the same way), the output's on
 //!   weft-sim's implicit step from there, and saved as `hood.json`.
-//! - An item is a sample drawn from its index and the run's seed: a garment of the pool,
-//!   a motion and a start frame, a material (HOOD's ranges; a share of samples gets two
-//!   materials split by a plane), 3 mm of noise on the start positions, and with some
-//!   probability a start at rest (with the settling step first, body still, when
-//!   `[model] settle_dt` > 0). The rollout of the current length runs from the skinned
-//!   garment; every step's state is the previous prediction, detached (no
+//! - An item is a sample drawn from its index and the run's seed: a garment of the pool, a
+//!   motion and a start frame, a material (`[model.materials]`, HOOD's ranges by default; a
+//!   share of samples gets two materials split by a plane), 3 mm of noise on the start
+//!   positions, and with some probability a start at rest (with the settling step first,
+//!   body still, when `[model] settle_dt` > 0). The rollout of the current length runs from
+//!   the skinned garment; every step's state is the previous prediction, detached (no
 //!   backpropagation through time; projected first when the model's step ends in a
-//!   projection, `[model] project_*`, as a rollout projects it), and the item's loss
-//!   is the mean over its steps of each term of the potential, and of the distance to
-//!   the implicit step when `solver_weight` > 0. HOOD steps the optimiser after every
-//!   rollout step; here the steps of one item share one optimiser step, so an item is a
-//!   pure function of its index and the model, and a resumed run repeats it exactly.
+//!   projection, `[model] project_*`, as a rollout projects it), and the item's loss is the
+//!   mean over its steps of each term of the potential, and of the distance to the implicit
+//!   step when `solver_weight` > 0. HOOD steps the optimiser after every rollout step; here
+//!   the steps of one item share one optimiser step, so an item is a pure function of its
+//!   index and the model, and a resumed run repeats it exactly.
 //! - Replay (`[train] replay`, not in HOOD): an item may instead go on with the rollout
 //!   an earlier item left in its slot, from the model's own state at the frame it
 //!   reached, so the network learns to correct the states its errors lead to. The kept
@@ -53,7 +53,7 @@ use weft_models::hood::{
 use weft_models::Clip;
 use weft_motion::{MotionKind, ProceduralParams};
 use weft_nn::adjacency::index_tensor;
-use weft_sim::{sample_hood_material, Attachment, BodyProximity, Energy, Material, StepInputs};
+use weft_sim::{Attachment, BodyProximity, Energy, Material, StepInputs};
 
 pub use config::{HoodRun, HoodTraining, COLLISION_LEVELS, OPEN_FRONT_BUTTONS};
 
@@ -292,23 +292,6 @@ fn two_materials(mesh: &TriMesh, a: Material, b: Material, rng: &mut SplitMix64)
     )
 }
 
-/// The softest (`0`) or stiffest and heaviest (`1`) corner of HOOD's training range.
-fn range_corner(end: usize) -> Material {
-    use weft_sim::hood_material::{
-        HOOD_BENDING_RANGE, HOOD_DENSITY_RANGE, HOOD_LAMBDA_RANGE, HOOD_MU_RANGE,
-    };
-    let hood = Material::hood();
-    Material::from_lame(
-        "custom",
-        HOOD_DENSITY_RANGE[end],
-        HOOD_MU_RANGE[end],
-        HOOD_LAMBDA_RANGE[end],
-        hood.thickness,
-        HOOD_BENDING_RANGE[end],
-        hood.friction,
-    )
-}
-
 /// A standard normal draw (Box–Muller).
 fn normal(rng: &mut SplitMix64) -> f64 {
     let u = rng.unit().max(1e-300);
@@ -544,9 +527,9 @@ impl HoodTask {
         let open = (self.training.open_front > 0.0 && rng.unit() < self.training.open_front)
             .then(|| rng.unit() < 0.5);
         let (mesh, centre_sets) = self.garments[garment].variant(open.is_some());
-        let a = sample_hood_material(&mut rng);
+        let a = self.config.materials.sample(&mut rng);
         let materials = if rng.unit() < self.training.two_materials {
-            let b = sample_hood_material(&mut rng);
+            let b = self.config.materials.sample(&mut rng);
             two_materials(mesh, a, b, &mut rng)
         } else {
             Materials::Uniform(a)
@@ -603,7 +586,7 @@ impl HoodTask {
 
     /// Held-out scenes: new shapes (drawn after the training ones), every motion in turn
     /// from its start, HOOD's default material and a garment split between the two
-    /// corners of HOOD's material range in turn.
+    /// corners of the run's material space (`[model.materials]`) in turn.
     fn validation_scenes(&self, rng: &mut SplitMix64) -> Result<Vec<Scene>> {
         let shapes = shapes(&self.training, self.training.validation_scenes, rng);
         let mut out = Vec::new();
@@ -623,7 +606,8 @@ impl HoodTask {
                 Materials::Uniform(Material::hood())
             } else {
                 let mut split = SplitMix64::new(k as u64);
-                two_materials(&mesh, range_corner(0), range_corner(1), &mut split)
+                let corners = [0, 1].map(|end| self.config.materials.corner(end));
+                two_materials(&mesh, corners[0], corners[1], &mut split)
             };
             out.push(Scene::new(
                 &mesh,
