@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # HOOD's run-time materials (issue 12 item 6): one unseen dress rolled out by a trained
-# HOOD run in three materials, all silk, all denim, and a denim bodice over a silk
-# skirt (`--material denim,silk --material-map MAP.npy`, the map splitting the dress at
-# BODICE of its height from the top); frames 0, 10, 20, 30 and 39 over the posed body,
-# a row each, with each HOOD row's strain and penetration printed. Above the HOOD silk
-# and denim rows, `weft simulate` of the same dress in the same material (the simulator
+# HOOD run in three materials, all LIGHT (silk), all HEAVY (denim), and a HEAVY bodice
+# over a LIGHT skirt (`--material HEAVY,LIGHT --material-map MAP.npy`, the map
+# splitting the dress at BODICE of its height from the top); frames 0, 10, 20, 30 and 39 over the posed body,
+# a row each, with each HOOD row's strain and penetration printed. Above the HOOD LIGHT
+# and HEAVY rows, `weft simulate` of the same dress in the same material (the simulator
 # takes one material a garment, and starts after its warm-up frames where HOOD starts
 # from the skinned dress). OPTIONS are extra `weft animate`
 # flags for every HOOD row (e.g. '--refine 4').
@@ -12,13 +12,14 @@
 #   tools/tables/material_pictures.sh RUN OUT.png
 #
 # Environment: WEFT (default `weft`), KIND (dress), VERTICES (1000), MOTION (twist),
-# SEED (3), BODICE (0.35), OPTIONS (none). Needs python3 with Pillow.
+# SEED (3), BODICE (0.35), LIGHT (silk), HEAVY (denim; each a preset name or a material
+# TOML file), OPTIONS (none). Needs python3 with Pillow.
 set -euo pipefail
 
 run=$1 out=$2
 weft=${WEFT:-weft}
 kind=${KIND:-dress} vertices=${VERTICES:-1000} motion=${MOTION:-twist} seed=${SEED:-3}
-bodice=${BODICE:-0.35}
+bodice=${BODICE:-0.35} light=${LIGHT:-silk} heavy=${HEAVY:-denim}
 read -ra options <<<"${OPTIONS:-}"
 frames=(0 10 20 30 39)
 tmp=$(mktemp -d)
@@ -26,7 +27,7 @@ trap 'rm -rf "$tmp"' EXIT
 garment="$tmp/garment.obj"
 "$weft" garment generate --kind "$kind" --vertices "$vertices" --seed 101 --out "$garment" >/dev/null
 "$weft" motion generate --kind "$motion" --seed "$seed" --frames 40 --out "$tmp/motion.npz" >/dev/null
-# The map: 0 (the first --material, denim) above the split, 1 (silk) below, as int64 .npy.
+# The map: 0 (the first --material, HEAVY) above the split, 1 (LIGHT) below, as int64 .npy.
 python3 - "$garment" "$bodice" "$tmp/map.npy" <<'PY'
 import struct, sys
 garment, bodice, out = sys.argv[1], float(sys.argv[2]), sys.argv[3]
@@ -49,12 +50,13 @@ simulate() {
     mv "$tmp/sim/obj" "$1"
     rm -rf "$tmp/sim"
 }
-names=("simulated silk" "HOOD silk" "simulated denim" "HOOD denim" "HOOD denim bodice, silk skirt")
-simulate "$tmp/r0" silk
-roll "$tmp/r1" --material silk
-simulate "$tmp/r2" denim
-roll "$tmp/r3" --material denim
-roll "$tmp/r4" --material denim,silk --material-map "$tmp/map.npy"
+l=$(basename "$light" .toml) h=$(basename "$heavy" .toml)
+names=("simulated $l" "HOOD $l" "simulated $h" "HOOD $h" "HOOD $h bodice, $l skirt")
+simulate "$tmp/r0" "$light"
+roll "$tmp/r1" --material "$light"
+simulate "$tmp/r2" "$heavy"
+roll "$tmp/r3" --material "$heavy"
+roll "$tmp/r4" --material "$heavy,$light" --material-map "$tmp/map.npy"
 rows=()
 for i in 0 1 2 3 4; do
     files=($(ls "$tmp/r$i"/*.obj | sort))

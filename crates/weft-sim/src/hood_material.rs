@@ -152,7 +152,7 @@ impl MaterialRanges {
 
     /// What of `material` lies outside the ranges (the network's inputs or the density
     /// it was trained on), one phrase per value, e.g. `μ 245 kPa (trained 15.9–63.6
-    /// kPa)`; empty when all lie inside (to rounding).
+    /// kPa)`; empty when all lie inside (to 0.1 %).
     pub fn outside(&self, material: &Material) -> Vec<String> {
         let (mu, lambda) = self.membrane(material);
         let kpa = |v: f64| format!("{:.3} kPa", v / 1e3);
@@ -165,8 +165,8 @@ impl MaterialRanges {
             ("density", material.density, self.density, &per_m2),
         ]
         .into_iter()
-        // Relative slack for the round trip through `E`, `ν` of a range end.
-        .filter(|(_, v, [lo, hi], _)| *v < lo * (1.0 - 1e-9) || *v > hi * (1.0 + 1e-9))
+        // Slack of 0.1 %: a range end written as a rounded `E`, `ν` is not outside.
+        .filter(|(_, v, [lo, hi], _)| *v < lo * (1.0 - 1e-3) || *v > hi * (1.0 + 1e-3))
         .map(|(name, v, [lo, hi], show)| {
             format!("{name} {} (trained {} to {})", show(v), show(lo), show(hi))
         })
