@@ -1279,6 +1279,33 @@ mod tests {
         HoodTask::new(&config, &training, body, Some(stats), 7, &device).unwrap()
     }
 
+    /// Samples and the validation's corners are drawn from the run's material space
+    /// (`[model.materials]`): with `μ` pinned to one value every material has it,
+    /// and the other fields keep HOOD's ranges.
+    #[test]
+    fn materials_are_drawn_from_the_runs_space() {
+        let mut config = HoodConfig::preset("cpu").unwrap();
+        config.materials.mu = [20_000.0; 2];
+        let t = task_on(config, small(), weft_nn::backend::cpu());
+        let hood = weft_sim::MaterialRanges::hood();
+        let mut seen = 0;
+        for item in 0..8 {
+            let list = match t.sample(item, 1).materials {
+                Materials::Uniform(m) => vec![m],
+                Materials::PerVertex(m) => m,
+            };
+            for m in list {
+                assert!((m.lame().0 - 20_000.0).abs() < 1e-6, "{m:?}");
+                assert!(hood.outside(&m).is_empty(), "{m:?}");
+                seen += 1;
+            }
+        }
+        assert!(seen >= 8);
+        let corners = [0, 1].map(|end| t.config.materials.corner(end));
+        assert!(corners.iter().all(|m| (m.lame().0 - 20_000.0).abs() < 1e-6));
+        assert!(corners[0].density < corners[1].density);
+    }
+
     #[test]
     fn samples_draw_their_hierarchy_centres_among_the_tied_ones() {
         let t = task(true);
