@@ -168,14 +168,21 @@ fn hood_trains_resumes_and_animates() {
     assert!(stdout(&o).contains("6 frames"), "{}", stdout(&o));
     let silk = dir.join("silk.pc2");
     assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
-    let o = anim(&["--material", "silk"], &silk);
+    let o = anim(&["--material", "silk", "--json"], &silk);
     assert!(o.status.success(), "{}", stderr(&o));
-    // Silk is stiffer than any material of HOOD's ranges: said, and read as the
-    // nearest one inside.
+    // Silk is stiffer than any material of HOOD's ranges: said, in the report too,
+    // and read as the nearest one inside.
     let e = stderr(&o);
     assert!(
         e.contains("warning: --material silk: μ 245.") && e.contains("nearest material inside"),
         "{e}"
+    );
+    let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let outside = report["materials_outside"].as_array().unwrap();
+    assert_eq!(outside.len(), 1, "{report}");
+    assert!(
+        outside[0].as_str().unwrap().starts_with("silk: μ"),
+        "{report}"
     );
     // The material enters the network: the frames differ.
     assert_ne!(
@@ -219,6 +226,11 @@ fn hood_trains_resumes_and_animates() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let report: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(
+        report["materials_outside"],
+        serde_json::json!([]),
+        "{report}"
+    );
     let c = &report["rollout_corrections"];
     assert!(
         c["edges_limited"].is_u64() && c["vertices_projected"].is_u64(),

@@ -119,46 +119,58 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let loading = || format!("loading run {}", args.run.display());
     let (header, _) = weft_models::run::read_run_config(&args.run).with_context(loading)?;
     let started = Instant::now();
-    let (deformer, mut frames, stopped, corrections): (Box<dyn Deformer + Send>, _, _, _) =
-        if header.model == ModelKind::Hood {
-            let mut hood = HoodPredictor::load(&args.run).with_context(loading)?;
+    let (deformer, mut frames, stopped, corrections, outside): (
+        Box<dyn Deformer + Send>,
+        _,
+        _,
+        _,
+        _,
+    ) = if header.model == ModelKind::Hood {
+        let mut hood = HoodPredictor::load(&args.run).with_context(loading)?;
+        let outside =
             args.hood
                 .configure(&mut hood, args.material.as_deref(), garment.vertex_count())?;
-            hood.options.contact_margin = push_out;
-            let clip = Clip {
-                betas: &betas,
-                poses: motion.poses(),
-                trans: motion.trans(),
-                fps: motion.fps(),
-            };
-            let rollout = hood.roll_out_clip(&garment, &body, &clip)?;
-            let frames: Vec<Vec<[f32; 3]>> = rollout
-                .frames
-                .iter()
-                .map(|f| f.iter().map(|p| p.map(|x| x as f32)).collect())
-                .collect();
-            let corrections = hood.options.over(&hood.config).corrects();
-            let corrections = corrections.then_some(rollout.corrections);
-            (Box::new(hood), frames, rollout.stopped, corrections)
-        } else {
-            if let Some(flag) = args.hood.given() {
-                bail!(
-                    "{flag} applies to a hood run; {} is a {} run",
-                    args.run.display(),
-                    header.model
-                );
-            }
-            if args.material.is_some() && args.made_for.is_none() {
-                bail!(
-                    "--material needs --made-for (its drape) or a hood run; {} is a {} run",
-                    args.run.display(),
-                    header.model
-                );
-            }
-            let deformer = load_deformer(&args.run).with_context(loading)?;
-            let frames = animate(deformer.as_ref(), &garment, &body, &betas, &motion)?;
-            (deformer, frames, None, None)
+        hood.options.contact_margin = push_out;
+        let clip = Clip {
+            betas: &betas,
+            poses: motion.poses(),
+            trans: motion.trans(),
+            fps: motion.fps(),
         };
+        let rollout = hood.roll_out_clip(&garment, &body, &clip)?;
+        let frames: Vec<Vec<[f32; 3]>> = rollout
+            .frames
+            .iter()
+            .map(|f| f.iter().map(|p| p.map(|x| x as f32)).collect())
+            .collect();
+        let corrections = hood.options.over(&hood.config).corrects();
+        let corrections = corrections.then_some(rollout.corrections);
+        (
+            Box::new(hood),
+            frames,
+            rollout.stopped,
+            corrections,
+            Some(outside),
+        )
+    } else {
+        if let Some(flag) = args.hood.given() {
+            bail!(
+                "{flag} applies to a hood run; {} is a {} run",
+                args.run.display(),
+                header.model
+            );
+        }
+        if args.material.is_some() && args.made_for.is_none() {
+            bail!(
+                "--material needs --made-for (its drape) or a hood run; {} is a {} run",
+                args.run.display(),
+                header.model
+            );
+        }
+        let deformer = load_deformer(&args.run).with_context(loading)?;
+        let frames = animate(deformer.as_ref(), &garment, &body, &betas, &motion)?;
+        (deformer, frames, None, None, None)
+    };
     let seconds = started.elapsed().as_secs_f64();
     // A diverged rollout keeps its finished frames: they are written, then reported.
     let motion = match &stopped {
@@ -229,6 +241,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             "model": deformer.name(),
             "inference_seconds": seconds,
             "pushed_out_vertices": pushed,
+            "materials_outside": outside,
             "rollout_corrections": corrections.map(|c| json!({
                 "edges_limited": c.edges_limited,
                 "vertices_projected": c.vertices_projected,

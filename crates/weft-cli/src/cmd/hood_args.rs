@@ -79,13 +79,14 @@ impl HoodArgs {
     }
 
     /// Sets `hood`'s materials (from `--material`, default HOOD's own) and buttons for a
-    /// garment of `vertices` vertices.
+    /// garment of `vertices` vertices. Returns what of the materials lies outside the
+    /// run's material space, each also printed as a warning.
     pub fn configure(
         &self,
         hood: &mut HoodPredictor,
         materials: Option<&str>,
         vertices: usize,
-    ) -> Result<()> {
+    ) -> Result<Vec<String>> {
         let list: Vec<_> = match materials {
             Some(spec) => spec.split(',').map(material).collect::<Result<_>>()?,
             None => vec![weft_sim::Material::hood()],
@@ -103,7 +104,8 @@ impl HoodArgs {
                     .collect(),
             ),
         };
-        for note in hood.materials_outside() {
+        let outside = hood.materials_outside();
+        for note in &outside {
             eprintln!("warning: --material {note}: {OUTSIDE}");
         }
         if let Some(path) = &self.buttons {
@@ -114,12 +116,12 @@ impl HoodArgs {
         hood.options.projection = !self.no_projection;
         hood.options.refine = self.refine;
         hood.options.objective = self.objective;
-        Ok(())
+        Ok(outside)
     }
 }
 
 /// What a material outside the run's material space means for the rollout.
-pub(super) const OUTSIDE: &str = "outside the materials the run was trained on; the \
+const OUTSIDE: &str = "outside the materials the run was trained on; the \
 network reads it as the nearest material inside, its physics (loss, --refine, \
 --objective) stays its own";
 
