@@ -119,13 +119,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let loading = || format!("loading run {}", args.run.display());
     let (header, _) = weft_models::run::read_run_config(&args.run).with_context(loading)?;
     let started = Instant::now();
-    let (deformer, mut frames, stopped, corrections, outside): (
-        Box<dyn Deformer + Send>,
-        _,
-        _,
-        _,
-        _,
-    ) = if header.model == ModelKind::Hood {
+    let (deformer, mut frames, stopped, corrections, outside) = if header.model == ModelKind::Hood {
         let mut hood = HoodPredictor::load(&args.run).with_context(loading)?;
         let outside =
             args.hood
@@ -146,7 +140,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         let corrections = hood.options.over(&hood.config).corrects();
         let corrections = corrections.then_some(rollout.corrections);
         (
-            Box::new(hood),
+            Box::new(hood) as Box<dyn Deformer + Send>,
             frames,
             rollout.stopped,
             corrections,
