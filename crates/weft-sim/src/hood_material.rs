@@ -151,17 +151,17 @@ impl MaterialRanges {
     }
 
     /// What of `material` lies outside the ranges (the network's inputs or the density
-    /// it was trained on), one phrase per value, e.g. `μ 245 kPa (trained 15.9–63.6
-    /// kPa)`; empty when all lie inside (to 0.1 %).
+    /// it was trained on), one phrase per value, e.g. `μ 245.499 kPa (trained 15.909
+    /// kPa to 63.636 kPa)`; empty when all lie inside (to 0.1 %).
     pub fn outside(&self, material: &Material) -> Vec<String> {
         let (mu, lambda) = self.membrane(material);
         let kpa = |v: f64| format!("{:.3} kPa", v / 1e3);
-        let plain = |v: f64| format!("{v:.3e}");
+        let bend = |v: f64| format!("{v:.3e} N·m");
         let per_m2 = |v: f64| format!("{v:.3} kg/m²");
         [
             ("μ", mu, self.mu, &kpa as &dyn Fn(f64) -> String),
             ("λ", lambda, self.lambda, &kpa),
-            ("k_b", material.bending_stiffness, self.bending, &plain),
+            ("k_b", material.bending_stiffness, self.bending, &bend),
             ("density", material.density, self.density, &per_m2),
         ]
         .into_iter()
