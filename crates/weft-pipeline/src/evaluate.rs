@@ -7,7 +7,7 @@ use std::path::Path;
 use weft_data::Dataset;
 use weft_eval::evaluate::{evaluate, write_report, EvalOptions, Evaluation};
 use weft_models::garfitnet::GarFitPredictor;
-use weft_models::hood::{HoodPredictor, RolloutOptions};
+use weft_models::hood::{HoodPredictor, RolloutOptions, OUTSIDE_MATERIAL_SPACE};
 use weft_models::run::read_run_config;
 use weft_models::{load_deformer, Deformer, ModelKind, SkinningBaseline, StepJudge};
 
@@ -71,7 +71,7 @@ pub fn evaluate_run(
         names.dedup();
         for note in h.presets_outside(&names) {
             progress(&format!(
-                "warning: {note}: outside the materials {} was trained on; its network reads it as the nearest material inside",
+                "warning: {note} ({}): {OUTSIDE_MATERIAL_SPACE}",
                 run.display()
             ));
         }

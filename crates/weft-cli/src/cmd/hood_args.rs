@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use weft_mesh::export::npy::{read_npy, NpyData};
-use weft_models::hood::{HoodPredictor, Materials};
+use weft_models::hood::{HoodPredictor, Materials, OUTSIDE_MATERIAL_SPACE};
 use weft_sim::StrainBounds;
 
 use super::cloth_args::{buttons, material};
@@ -106,7 +106,7 @@ impl HoodArgs {
         };
         let outside = hood.materials_outside();
         for note in &outside {
-            eprintln!("warning: --material {note}: {OUTSIDE}");
+            eprintln!("warning: --material {note}: {OUTSIDE_MATERIAL_SPACE}");
         }
         if let Some(path) = &self.buttons {
             hood.buttons = buttons(path)?;
@@ -119,11 +119,6 @@ impl HoodArgs {
         Ok(outside)
     }
 }
-
-/// What a material outside the run's material space means for the rollout.
-const OUTSIDE: &str = "outside the materials the run was trained on; the \
-network reads it as the nearest material inside, its physics (loss, --refine, \
---objective) stays its own";
 
 /// `--strain-limit PERCENT` and `--compression-limit PERCENT` (`weft animate`, `weft
 /// eval`) as fractions of the rest length.

@@ -28,7 +28,7 @@ pub(crate) mod testutil;
 pub use config::HoodConfig;
 pub use garment::HoodGarment;
 pub use model::{Hood, HoodBatch, HoodInput, InferHood};
-pub use predictor::HoodPredictor;
+pub use predictor::{HoodPredictor, OUTSIDE_MATERIAL_SPACE};
 pub use rollout::{
     roll_out, Advance, Corrections, Corrector, Rollout, RolloutOptions, CONTACT_ROUNDS,
     ROUND_SWEEPS, STRAIN_LIMIT_SWEEPS,

@@ -178,6 +178,13 @@ impl HoodPredictor {
     }
 }
 
+/// What a material outside the run's material space means for a rollout: the warning
+/// `weft animate` and `weft eval` give after [`HoodPredictor::materials_outside`] and
+/// [`HoodPredictor::presets_outside`].
+pub const OUTSIDE_MATERIAL_SPACE: &str = "outside the materials the run was trained on; \
+the network reads it as the nearest material inside, its physics (loss, --refine, \
+--objective) stays its own";
+
 /// Every vertex made of the weft-sim preset `name` (a dataset's recorded material).
 fn preset(name: &str) -> Result<Materials, ModelError> {
     Material::preset(name)
